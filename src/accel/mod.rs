@@ -1,0 +1,231 @@
+//! Ray casting: the one interface the tracer uses, with two backends behind it —
+//! Debian's Embree over FFI (`embree`) and pure-Rust obvhs (`bvh`, feature `obvhs`).
+//!
+//! Rays and hits travel as structures of arrays (SoA) so batches map straight onto
+//! Embree's packets and streams. Coordinates are the scene's re-centred local frame (f32).
+
+pub mod embree;
+#[cfg(feature = "obvhs")]
+pub mod bvh;
+
+use crate::scene::Geometry;
+use crate::{Error, Result};
+
+/// Triangle id of a ray that hit nothing.
+pub const NO_HIT: u32 = u32::MAX;
+
+/// A batch of rays, structure of arrays. All vectors have the same length.
+#[derive(Clone, Debug, Default)]
+pub struct RayBatch {
+    pub ox: Vec<f32>,
+    pub oy: Vec<f32>,
+    pub oz: Vec<f32>,
+    pub dx: Vec<f32>,
+    pub dy: Vec<f32>,
+    pub dz: Vec<f32>,
+    pub tnear: Vec<f32>,
+    pub tfar: Vec<f32>,
+}
+
+impl RayBatch {
+    pub fn with_capacity(n: usize) -> Self {
+        let v = || Vec::with_capacity(n);
+        RayBatch {
+            ox: v(),
+            oy: v(),
+            oz: v(),
+            dx: v(),
+            dy: v(),
+            dz: v(),
+            tnear: v(),
+            tfar: v(),
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.ox.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.ox.is_empty()
+    }
+
+    pub fn clear(&mut self) {
+        for v in [
+            &mut self.ox,
+            &mut self.oy,
+            &mut self.oz,
+            &mut self.dx,
+            &mut self.dy,
+            &mut self.dz,
+            &mut self.tnear,
+            &mut self.tfar,
+        ] {
+            v.clear();
+        }
+    }
+
+    /// Appends one ray; `dir` need not be normalised (distances are then in its units).
+    #[inline]
+    pub fn push(&mut self, origin: [f32; 3], dir: [f32; 3], tnear: f32, tfar: f32) {
+        self.ox.push(origin[0]);
+        self.oy.push(origin[1]);
+        self.oz.push(origin[2]);
+        self.dx.push(dir[0]);
+        self.dy.push(dir[1]);
+        self.dz.push(dir[2]);
+        self.tnear.push(tnear);
+        self.tfar.push(tfar);
+    }
+}
+
+/// Closest hits of a batch, structure of arrays, one entry per ray.
+#[derive(Clone, Debug, Default)]
+pub struct HitBatch {
+    /// Distance along the ray (in units of its direction's length); `f32::INFINITY` on a miss.
+    pub t: Vec<f32>,
+    /// Global triangle id (index into `Geometry::triangles`), or [`NO_HIT`].
+    pub tri: Vec<u32>,
+    /// Barycentric coordinates of the hit (weights of vertices 1 and 2).
+    pub u: Vec<f32>,
+    pub v: Vec<f32>,
+    /// Unit geometric normal of the hit triangle, (v1 − v0) × (v2 − v0) orientation.
+    pub ngx: Vec<f32>,
+    pub ngy: Vec<f32>,
+    pub ngz: Vec<f32>,
+}
+
+impl HitBatch {
+    /// Resizes every array to `n` entries, marked as misses.
+    pub fn reset(&mut self, n: usize) {
+        self.t.clear();
+        self.t.resize(n, f32::INFINITY);
+        self.tri.clear();
+        self.tri.resize(n, NO_HIT);
+        for v in [
+            &mut self.u,
+            &mut self.v,
+            &mut self.ngx,
+            &mut self.ngy,
+            &mut self.ngz,
+        ] {
+            v.clear();
+            v.resize(n, 0.0);
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+}
+
+/// How a batch is handed to the backend. Embree implements all; obvhs traces one ray
+/// at a time whatever is asked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RayApi {
+    /// `rtcIntersect1` / `rtcOccluded1`, one call per ray.
+    Single,
+    /// `rtcIntersect8` / `rtcOccluded8`.
+    Packet8,
+    /// `rtcIntersect16` / `rtcOccluded16`.
+    Packet16,
+    /// `rtcIntersect1M` / `rtcOccluded1M` with the incoherent flag.
+    Stream,
+}
+
+impl RayApi {
+    pub const ALL: [RayApi; 4] = [
+        RayApi::Single,
+        RayApi::Packet8,
+        RayApi::Packet16,
+        RayApi::Stream,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            RayApi::Single => "single",
+            RayApi::Packet8 => "packet8",
+            RayApi::Packet16 => "packet16",
+            RayApi::Stream => "stream",
+        }
+    }
+}
+
+/// A ray-casting backend built over a scene's triangles.
+pub trait RayCaster: Send + Sync {
+    /// Backend name as on the command line (`embree`, `obvhs`).
+    fn name(&self) -> &'static str;
+
+    /// Closest hits of `rays` into `hits` (resized to the batch), through the
+    /// backend's fastest measured path for closest-hit rays.
+    fn intersect(&self, rays: &RayBatch, hits: &mut HitBatch) {
+        self.intersect_with(self.default_intersect_api(), rays, hits)
+    }
+
+    /// Occlusion of `rays` between `tnear` and `tfar` into `occluded` (resized), through
+    /// the backend's fastest measured path for shadow rays.
+    fn occluded(&self, rays: &RayBatch, occluded: &mut Vec<bool>) {
+        self.occluded_with(self.default_occluded_api(), rays, occluded)
+    }
+
+    /// Closest hits through a chosen API.
+    fn intersect_with(&self, api: RayApi, rays: &RayBatch, hits: &mut HitBatch);
+
+    /// Occlusion through a chosen API.
+    fn occluded_with(&self, api: RayApi, rays: &RayBatch, occluded: &mut Vec<bool>);
+
+    /// The API `intersect` uses.
+    fn default_intersect_api(&self) -> RayApi;
+
+    /// The API `occluded` uses.
+    fn default_occluded_api(&self) -> RayApi;
+}
+
+/// Which backend to build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Backend {
+    #[default]
+    Embree,
+    Obvhs,
+}
+
+impl std::str::FromStr for Backend {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "embree" => Ok(Backend::Embree),
+            "obvhs" => Ok(Backend::Obvhs),
+            other => Err(Error::input(
+                "--backend",
+                format!("unknown backend `{other}` (expected `embree` or `obvhs`)"),
+            )),
+        }
+    }
+}
+
+impl Backend {
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Embree => "embree",
+            Backend::Obvhs => "obvhs",
+        }
+    }
+}
+
+/// Builds the chosen backend over `geometry`.
+pub fn build(backend: Backend, geometry: &Geometry) -> Result<Box<dyn RayCaster>> {
+    match backend {
+        Backend::Embree => Ok(Box::new(embree::EmbreeScene::new(geometry)?)),
+        #[cfg(feature = "obvhs")]
+        Backend::Obvhs => Ok(Box::new(bvh::ObvhsScene::new(geometry))),
+        #[cfg(not(feature = "obvhs"))]
+        Backend::Obvhs => Err(Error::Unsupported(
+            "--backend obvhs: this build lacks the `obvhs` feature (cargo build --features obvhs)"
+                .into(),
+        )),
+    }
+}

@@ -1,0 +1,14 @@
+//! luxtally: forward Monte Carlo photon tracing that tallies light on scene surfaces and
+//! virtual receivers, and reports, forecasts and controls its own statistical error.
+//!
+//! Data path (each module only uses the ones above it):
+//! `scene` (load and validate) → `accel` (ray casting backends) → `trace` (photon
+//! batches, epochs) → `tally` (receivers and triangle maps) → `stats` (equations of
+//! method.md, forecast, stop criteria) → `output` (summary.json and files).
+
+pub mod accel;
+pub mod error;
+pub mod rng;
+pub mod scene;
+
+pub use error::{Error, Result};

@@ -1,0 +1,26 @@
+//! Random numbers: photon `i` of a run gets its own stream derived from (seed, i), so
+//! results never depend on threads or scheduling.
+
+use rand::SeedableRng;
+use rand_pcg::Pcg32;
+
+/// SplitMix64 finaliser: a bijective 64-bit mix.
+#[inline]
+fn mix64(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// The random stream of photon `index` in a run seeded with `seed`.
+#[inline]
+pub fn photon_stream(seed: u64, index: u64) -> Pcg32 {
+    let state = mix64(seed ^ mix64(index.wrapping_add(0x9e37_79b9_7f4a_7c15)));
+    let stream = mix64(state ^ 0x5851_f42d_4c95_7f2d);
+    Pcg32::new(state, stream)
+}
+
+/// A stream for a purpose other than photons (tests, benchmarks), seeded from `seed`.
+pub fn aux_stream(seed: u64) -> Pcg32 {
+    Pcg32::seed_from_u64(mix64(seed ^ 0xdead_beef_cafe_f00d))
+}

@@ -1,0 +1,199 @@
+//! The scene: the TOML file of the contract, parsed, validated and loaded into the
+//! structures the tracer uses. Geometry is re-centred in f64 before it becomes f32.
+//!
+//! Every other position in `Scene` (lights, receivers) stays in world coordinates (f64);
+//! `Geometry::origin` maps between the two frames: world = origin + local.
+
+use glam::{DVec3, Vec3};
+use std::path::PathBuf;
+
+/// A material: any mix of Lambertian reflection/transmission and ideal specular
+/// reflection/refraction. The fractions sum to at most 1; the rest is absorbed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Diffuse (Lambertian) reflectance ρ.
+    pub reflectance: f64,
+    /// Diffuse (Lambertian) transmittance τ.
+    pub transmittance: f64,
+    /// Ideal mirror reflectance.
+    pub specular_reflectance: f64,
+    /// Ideal refraction (dielectric of index `ior`, with Fresnel reflection at its face).
+    pub specular_transmittance: f64,
+    pub ior: f64,
+}
+
+impl Material {
+    /// A black (fully absorbing) material.
+    pub fn black(name: &str) -> Self {
+        Material::lambertian(name, 0.0)
+    }
+
+    /// A Lambertian reflector of reflectance `rho`.
+    pub fn lambertian(name: &str, rho: f64) -> Self {
+        Material {
+            name: name.to_string(),
+            reflectance: rho,
+            transmittance: 0.0,
+            specular_reflectance: 0.0,
+            specular_transmittance: 0.0,
+            ior: 1.5,
+        }
+    }
+
+    /// Total albedo: the fraction of incident flux that is not absorbed.
+    pub fn albedo(&self) -> f64 {
+        self.reflectance + self.transmittance + self.specular_reflectance + self.specular_transmittance
+    }
+
+    /// True when the material has a specular lobe (mirror or refraction).
+    pub fn is_specular(&self) -> bool {
+        self.specular_reflectance > 0.0 || self.specular_transmittance > 0.0
+    }
+}
+
+/// All triangles of the scene in one indexed mesh, in the re-centred local frame.
+#[derive(Clone, Debug, Default)]
+pub struct Geometry {
+    /// World position of the local frame's origin (centre of the scene's bounds).
+    pub origin: DVec3,
+    /// Vertex positions, local frame.
+    pub vertices: Vec<Vec3>,
+    /// Triangles as vertex indices.
+    pub triangles: Vec<[u32; 3]>,
+    /// Material index (into `Scene::materials`) per triangle.
+    pub material: Vec<u32>,
+    /// Triangle area in m², computed in f64 from world coordinates.
+    pub area_m2: Vec<f64>,
+    /// Unit geometric normal per triangle, (v1 − v0) × (v2 − v0) orientation.
+    pub normal: Vec<Vec3>,
+    /// Index of the `[[objects]]` entry each triangle came from.
+    pub object: Vec<u32>,
+}
+
+impl Geometry {
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Total geometric area S (one side per triangle).
+    pub fn total_area_m2(&self) -> f64 {
+        self.area_m2.iter().sum()
+    }
+
+    /// World-space bounds (min, max) of all vertices, or `None` without geometry.
+    pub fn world_bounds(&self) -> Option<(DVec3, DVec3)> {
+        let mut it = self.vertices.iter();
+        let first = it.next()?.as_dvec3();
+        let (lo, hi) = it.fold((first, first), |(lo, hi), v| {
+            let v = v.as_dvec3();
+            (lo.min(v), hi.max(v))
+        });
+        Some((lo + self.origin, hi + self.origin))
+    }
+}
+
+/// A light source, world coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LightKind {
+    /// Isotropic point source.
+    Point { position: DVec3, intensity_cd: f64 },
+    /// Spot: intensity `intensity_cd` on axis up to `falloff_deg` off axis, then a smooth
+    /// (smoothstep in cos θ) fall to zero at `cone_deg`.
+    Spot {
+        position: DVec3,
+        direction: DVec3,
+        intensity_cd: f64,
+        cone_deg: f64,
+        falloff_deg: f64,
+    },
+    /// Parallel source: `illuminance_lx` on a plane normal to `direction` (unit, the way
+    /// the light travels).
+    Directional { direction: DVec3, illuminance_lx: f64 },
+    /// One-sided Lambertian parallelogram emitting on the side of u × v.
+    Area {
+        corner: DVec3,
+        u: DVec3,
+        v: DVec3,
+        luminance_cdm2: f64,
+    },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Light {
+    /// `lights[i]` as in the scene file, for messages.
+    pub label: String,
+    pub kind: LightKind,
+}
+
+/// What a receiver measures.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Quantity {
+    /// Incident flux on the face whose normal is u × v, per cell area (lx).
+    Illuminance,
+    /// Flux crossing the cell towards the meter within its cone (cd/m²).
+    Luminance {
+        /// Unit vector: where the meter looks (light travels against it).
+        view_direction: DVec3,
+        half_angle_deg: f64,
+    },
+}
+
+/// How a receiver is scored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Estimator {
+    /// Analog: a cell scores when a photon crosses it.
+    #[default]
+    Track,
+    NextEvent,
+    Auto,
+}
+
+/// A virtual detector: a grid of cells on a parallelogram; it never blocks light.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Receiver {
+    pub name: String,
+    pub corner: DVec3,
+    pub u: DVec3,
+    pub v: DVec3,
+    /// Cells along u, along v.
+    pub cells: [u32; 2],
+    pub quantity: Quantity,
+    pub estimator: Estimator,
+}
+
+impl Receiver {
+    /// Area of one cell in m².
+    pub fn cell_area_m2(&self) -> f64 {
+        self.u.cross(self.v).length() / (self.cells[0] as f64 * self.cells[1] as f64)
+    }
+
+    pub fn cell_count(&self) -> usize {
+        self.cells[0] as usize * self.cells[1] as usize
+    }
+}
+
+/// What to stop on, from the scene's `[simulation]` table (the command line overrides it).
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Simulation {
+    pub photons: Option<u64>,
+    pub seed: u64,
+    pub time_limit_s: Option<f64>,
+    pub target_error: Option<f64>,
+    pub target: Option<String>,
+    pub absolute: bool,
+    pub min_hits: Option<u64>,
+}
+
+/// A loaded, validated scene.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    pub name: String,
+    /// The scene file, for messages.
+    pub path: PathBuf,
+    pub materials: Vec<Material>,
+    pub geometry: Geometry,
+    pub lights: Vec<Light>,
+    pub receivers: Vec<Receiver>,
+    pub simulation: Simulation,
+}
