@@ -197,3 +197,46 @@ pub struct Scene {
     pub receivers: Vec<Receiver>,
     pub simulation: Simulation,
 }
+
+impl Geometry {
+    /// Builds the scene mesh from world-space vertices and triangles: re-centres on the
+    /// centre of the bounds in f64, then stores f32 local positions, so geometry far from
+    /// the world origin keeps full f32 precision. Triangles of zero area (they can never
+    /// be hit and have no illuminance) are dropped. `material` and `object` are per
+    /// input triangle.
+    pub fn from_world(
+        vertices: &[DVec3],
+        triangles: &[[u32; 3]],
+        material: &[u32],
+        object: &[u32],
+    ) -> Geometry {
+        let origin = match vertices.split_first() {
+            None => DVec3::ZERO,
+            Some((first, rest)) => {
+                let (lo, hi) = rest
+                    .iter()
+                    .fold((*first, *first), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
+                (lo + hi) * 0.5
+            }
+        };
+        let mut g = Geometry {
+            origin,
+            vertices: vertices.iter().map(|v| (*v - origin).as_vec3()).collect(),
+            ..Geometry::default()
+        };
+        for (k, tri) in triangles.iter().enumerate() {
+            let [a, b, c] = tri.map(|i| vertices[i as usize]);
+            let cross = (b - a).cross(c - a);
+            let area = 0.5 * cross.length();
+            if !(area > 0.0) {
+                continue;
+            }
+            g.triangles.push(*tri);
+            g.material.push(material[k]);
+            g.object.push(object[k]);
+            g.area_m2.push(area);
+            g.normal.push((cross / (2.0 * area)).as_vec3());
+        }
+        g
+    }
+}
