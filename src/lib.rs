@@ -12,3 +12,8 @@ pub mod rng;
 pub mod scene;
 
 pub use error::{Error, Result};
+pub mod tally;
+pub mod trace;
+pub mod stats;
+pub mod run;
+pub mod output;

@@ -1,1 +1,281 @@
-fn main() {}
+//! The `luxtally` command line: parses, calls the library, prints one line on error.
+
+use clap::{Parser, Subcommand};
+use luxtally::accel::Backend;
+use luxtally::output::{summary, write_atomic};
+use luxtally::run::{run, Observer, RunOptions, RunState};
+use luxtally::{Error, Result};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(
+    name = "luxtally",
+    version,
+    about = "Forward photon tracing that reports, forecasts and controls its own error"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Trace photons through a scene and write summary.json (and more) to --out.
+    Run(RunArgs),
+    /// Print a scene's statistics: triangles, materials, lights, receivers, bounds.
+    Info { scene: PathBuf },
+}
+
+#[derive(clap::Args)]
+struct RunArgs {
+    /// The scene file (TOML).
+    scene: PathBuf,
+    /// Output directory (default: out/<scene name>/).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Photons to emit at most (default: the scene's [simulation] photons).
+    #[arg(long)]
+    photons: Option<u64>,
+    /// Stop after this many seconds of tracing.
+    #[arg(long, value_name = "SECONDS")]
+    time_limit: Option<f64>,
+    /// Stop once the target's error is at most this (relative; absolute with --absolute).
+    #[arg(long, value_name = "FRACTION")]
+    target_error: Option<f64>,
+    /// What the error target applies to: global, receiver:NAME or receiver:NAME[i0..i1,j0..j1].
+    #[arg(long, value_name = "WHAT")]
+    target: Option<String>,
+    /// --target-error is absolute, in the quantity's unit.
+    #[arg(long)]
+    absolute: bool,
+    /// Stop once every cell of the target received this many hits.
+    #[arg(long, value_name = "N")]
+    min_hits: Option<u64>,
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Worker threads (default: all cores). Results do not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Ray-casting backend: embree or obvhs.
+    #[arg(long)]
+    backend: Option<String>,
+    /// No progress line.
+    #[arg(long)]
+    quiet: bool,
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            // --help and --version are not errors.
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    let result = match cli.command {
+        Command::Run(args) => run_command(args),
+        Command::Info { scene } => info_command(&scene),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("luxtally: {}", one_line(&e.to_string()));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Errors are printed on one line, whatever their source wrote.
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+fn run_command(args: RunArgs) -> Result<()> {
+    let scene = luxtally::scene::load(&args.scene)?;
+    let mut options = RunOptions::from_scene(&scene);
+    if args.photons.is_some() {
+        options.photons = args.photons;
+    }
+    if args.time_limit.is_some() {
+        options.time_limit_s = args.time_limit;
+    }
+    if args.target_error.is_some() {
+        options.target_error = args.target_error;
+    }
+    if args.target.is_some() {
+        options.target = args.target;
+    }
+    options.absolute |= args.absolute;
+    if args.min_hits.is_some() {
+        options.min_hits = args.min_hits;
+    }
+    if let Some(seed) = args.seed {
+        options.seed = seed;
+    }
+    if let Some(threads) = args.threads {
+        if threads == 0 {
+            return Err(Error::input("--threads", "must be at least 1"));
+        }
+        options.threads = threads;
+    }
+    if let Some(b) = &args.backend {
+        options.backend = b.parse::<Backend>()?;
+    }
+    let out = args
+        .out
+        .unwrap_or_else(|| Path::new("out").join(&scene.name));
+    std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
+
+    let interrupt = Arc::new(AtomicBool::new(false));
+    {
+        let flag = interrupt.clone();
+        // A second Ctrl-C ends the process at once.
+        let _ = ctrlc::set_handler(move || {
+            if flag.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        });
+    }
+    let mut observer = CliObserver {
+        quiet: args.quiet,
+        out: out.clone(),
+        last_save: Instant::now(),
+        save_error: None,
+    };
+    let result = run(&scene, &options, &interrupt, &mut observer)?;
+    if !args.quiet {
+        eprintln!();
+    }
+    let state = result.state(&scene, &options);
+    save_summary(&out, &state)?;
+    if let Some(e) = observer.save_error {
+        return Err(e);
+    }
+    let s = summary::build(&state);
+    if !args.quiet {
+        println!(
+            "{}: {} photons, {} rays in {:.2} s ({:.1} Mrays/s), stopped on {}; results in {}",
+            s.scene,
+            s.photons_emitted,
+            s.rays_traced,
+            s.elapsed_s,
+            s.rays_traced as f64 / s.elapsed_s.max(1e-9) / 1e6,
+            s.stop_reason.unwrap_or("?"),
+            out.display()
+        );
+        for (name, r) in &s.receivers {
+            println!(
+                "  receiver {name}: mean {:.4} {}, error {:.2} % (arithmetic) {:.2} % (quadratic)",
+                r.mean,
+                r.unit,
+                100.0 * r.rel_error.arithmetic,
+                100.0 * r.rel_error.quadratic
+            );
+        }
+        println!(
+            "  global: {} triangles, mean {:.4} lx, error {:.2} %",
+            s.global.triangles,
+            s.global.mean_illuminance_lx,
+            100.0 * s.global.rel_error.arithmetic
+        );
+    }
+    Ok(())
+}
+
+fn save_summary(out: &Path, state: &RunState<'_>) -> Result<()> {
+    let s = summary::build(state);
+    let json = serde_json::to_vec_pretty(&s)
+        .map_err(|e| Error::Unsupported(format!("summary.json: {e}")))?;
+    write_atomic(&out.join("summary.json"), &json)
+}
+
+/// Progress line on stderr and a summary.json saved every few seconds, so a long run
+/// never loses the work already done.
+struct CliObserver {
+    quiet: bool,
+    out: PathBuf,
+    last_save: Instant,
+    save_error: Option<Error>,
+}
+
+const SAVE_EVERY_S: f64 = 10.0;
+
+impl Observer for CliObserver {
+    fn epoch(&mut self, state: &RunState<'_>) {
+        if !self.quiet {
+            let p = state.history.last();
+            let error = p.map_or(f64::NAN, |p| p.rel_error);
+            let unit = if state.options.absolute { "" } else { " %" };
+            let scale = if state.options.absolute { 1.0 } else { 100.0 };
+            let goal = state
+                .options
+                .target_error
+                .map(|g| format!(" → {:.3}{unit}", g * scale))
+                .unwrap_or_default();
+            let eta = state
+                .forecast
+                .map(|f| format!(", done in ~{:.1} s", (f.total_s - state.elapsed_s).max(0.0)))
+                .unwrap_or_default();
+            eprint!(
+                "\r{:7.1} s  {:>12} photons  {:6.1} Mrays/s  {}: {:.3}{unit}{goal}{eta}    ",
+                state.elapsed_s,
+                state.tallies.photons,
+                state.tallies.rays as f64 / state.elapsed_s.max(1e-9) / 1e6,
+                state.target.describe(&state.scene.receivers),
+                error * scale,
+            );
+            let _ = std::io::stderr().flush();
+        }
+        if state.stop_reason.is_none() && self.last_save.elapsed().as_secs_f64() >= SAVE_EVERY_S {
+            self.last_save = Instant::now();
+            if let Err(e) = save_summary(&self.out, state) {
+                self.save_error.get_or_insert(e);
+            }
+        }
+    }
+}
+
+fn info_command(path: &Path) -> Result<()> {
+    let scene = luxtally::scene::load(path)?;
+    let g = &scene.geometry;
+    println!(
+        "scene {}: {} triangles, {:.3} m² of surface",
+        scene.name,
+        g.triangle_count(),
+        g.total_area_m2()
+    );
+    if let Some((lo, hi)) = g.world_bounds() {
+        println!("  bounds {:.3?} → {:.3?}", lo.to_array(), hi.to_array());
+    }
+    for m in &scene.materials {
+        println!(
+            "  material {}: ρ {} τ {} mirror {} glass {} (ior {})",
+            m.name,
+            m.reflectance,
+            m.transmittance,
+            m.specular_reflectance,
+            m.specular_transmittance,
+            m.ior
+        );
+    }
+    for l in &scene.lights {
+        println!("  {}: {:?}", l.label, l.kind);
+    }
+    for r in &scene.receivers {
+        println!(
+            "  receiver {}: {}×{} cells of {:.4} m²",
+            r.name,
+            r.cells[0],
+            r.cells[1],
+            r.cell_area_m2()
+        );
+    }
+    Ok(())
+}

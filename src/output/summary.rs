@@ -1,0 +1,166 @@
+//! summary.json: every key of the contract, plus what a user needs to judge the run.
+
+use crate::run::RunState;
+use crate::scene::{Estimator, Quantity};
+use crate::stats::forecast::HistoryPoint;
+use crate::stats::{map_stats, mean_illuminance_sigma_lx, receiver_stats, variance_of_variance, Averaged, MapKind};
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+#[derive(Serialize)]
+pub struct Summary {
+    pub scene: String,
+    pub backend: String,
+    pub seed: u64,
+    pub threads: usize,
+    pub photons_emitted: u64,
+    pub rays_traced: u64,
+    /// Wall time of the photon pass (s); `setup_s` is loading and BVH build before it.
+    pub elapsed_s: f64,
+    pub setup_s: f64,
+    /// Null while the run is still going (a summary saved mid-run).
+    pub stop_reason: Option<&'static str>,
+    pub total_flux_lm: f64,
+    pub lights: Vec<LightSummary>,
+    pub target: String,
+    pub bounce_cap: u32,
+    pub photons_killed_by_bounce_cap: u64,
+    pub receivers: BTreeMap<String, ReceiverSummary>,
+    pub global: GlobalSummary,
+    pub history: Vec<HistoryPoint>,
+    pub forecast: Option<ForecastSummary>,
+}
+
+#[derive(Serialize)]
+pub struct LightSummary {
+    pub label: String,
+    pub flux_lm: f64,
+}
+
+#[derive(Serialize)]
+pub struct ReceiverSummary {
+    pub quantity: &'static str,
+    pub unit: &'static str,
+    pub estimator: &'static str,
+    pub cells: [u32; 2],
+    /// Index j * cells[0] + i.
+    pub values: Vec<f64>,
+    pub sigma: Vec<f64>,
+    pub hits: Vec<u64>,
+    pub mean: f64,
+    pub rel_error: Averaged,
+    /// Largest variance of the variance over the cells that scored (MCNP's check:
+    /// above 0.1 the σ of that cell is not yet reliable).
+    pub max_vov: f64,
+}
+
+#[derive(Serialize)]
+pub struct GlobalSummary {
+    pub triangles: usize,
+    pub area_m2: f64,
+    pub mean_illuminance_lx: f64,
+    /// Standard error of `mean_illuminance_lx` (from per-history hit counts).
+    pub mean_sigma_lx: f64,
+    /// RMS error of the per-triangle map, σ = d/2 from the odd/even maps (method.md §3).
+    pub sigma_lx: f64,
+    pub rel_error: Averaged,
+    pub indirect_mean_illuminance_lx: f64,
+    pub indirect_rel_error: Averaged,
+}
+
+#[derive(Serialize)]
+pub struct ForecastSummary {
+    pub target_error: f64,
+    pub predicted_total_s: f64,
+    pub predicted_photons: u64,
+}
+
+/// Builds the summary of a run's current state.
+pub fn build(state: &RunState<'_>) -> Summary {
+    let scene = state.scene;
+    let t = state.tallies;
+    let mut receivers = BTreeMap::new();
+    let mut first = 0usize;
+    for r in &scene.receivers {
+        let cells = &t.cells[first..first + r.cell_count()];
+        first += r.cell_count();
+        let stats = receiver_stats(cells, t.photons);
+        let max_vov = cells
+            .iter()
+            .filter(|c| c.hits > 0)
+            .map(|c| variance_of_variance(c, t.photons))
+            .fold(0.0, f64::max);
+        let (quantity, unit) = match r.quantity {
+            Quantity::Illuminance => ("illuminance", "lx"),
+            Quantity::Luminance { .. } => ("luminance", "cd/m2"),
+        };
+        receivers.insert(
+            r.name.clone(),
+            ReceiverSummary {
+                quantity,
+                unit,
+                estimator: estimator_name(r.estimator),
+                cells: r.cells,
+                values: stats.values,
+                sigma: stats.sigma,
+                hits: stats.hits,
+                mean: stats.mean,
+                rel_error: stats.rel_error,
+                max_vov,
+            },
+        );
+    }
+    let g = &scene.geometry;
+    let total = map_stats(t, MapKind::Total, &g.area_m2, state.total_flux_lm);
+    let indirect = map_stats(t, MapKind::Indirect, &g.area_m2, state.total_flux_lm);
+    Summary {
+        scene: scene.name.clone(),
+        backend: state.options.backend.name().to_string(),
+        seed: state.options.seed,
+        threads: state.threads,
+        photons_emitted: t.photons,
+        rays_traced: t.rays,
+        elapsed_s: state.elapsed_s,
+        setup_s: state.setup_s,
+        stop_reason: state.stop_reason.map(|r| r.as_str()),
+        total_flux_lm: state.total_flux_lm,
+        lights: scene
+            .lights
+            .iter()
+            .zip(state.light_flux_lm)
+            .map(|(l, f)| LightSummary { label: l.label.clone(), flux_lm: *f })
+            .collect(),
+        target: state.target.describe(&scene.receivers),
+        bounce_cap: state.bounce_cap,
+        photons_killed_by_bounce_cap: t.killed_by_bounce_cap,
+        receivers,
+        global: GlobalSummary {
+            triangles: g.triangle_count(),
+            area_m2: g.total_area_m2(),
+            mean_illuminance_lx: total.mean_lx,
+            mean_sigma_lx: mean_illuminance_sigma_lx(t, g.total_area_m2(), state.total_flux_lm),
+            sigma_lx: total.sigma_lx,
+            rel_error: total.rel_error,
+            indirect_mean_illuminance_lx: indirect.mean_lx,
+            indirect_rel_error: indirect.rel_error,
+        },
+        history: state.history.to_vec(),
+        forecast: match (state.options.target_error, state.forecast) {
+            (Some(target_error), Some(f)) => Some(ForecastSummary {
+                target_error,
+                predicted_total_s: f.total_s,
+                predicted_photons: f.photons,
+            }),
+            _ => None,
+        },
+    }
+}
+
+/// The estimator a receiver is scored with in this build: `auto` resolves to `track`
+/// until next-event estimation exists.
+fn estimator_name(e: Estimator) -> &'static str {
+    match e {
+        Estimator::Track | Estimator::Auto => "track",
+        Estimator::NextEvent => "next_event",
+    }
+}

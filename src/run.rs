@@ -1,0 +1,297 @@
+//! A run: epochs of photons traced in parallel, merged in photon order, evaluated,
+//! forecast and checked against the stop criteria; everything traced is in the result.
+
+use crate::accel::{self, Backend, RayCaster};
+use crate::scene::Scene;
+use crate::stats::forecast::{forecast, Forecast, HistoryPoint};
+use crate::stats::stop::{min_hits, receiver_target_error, StopReason, Target};
+use crate::stats::{map_stats, MapKind};
+use crate::tally::{ChunkTally, Tallies};
+use crate::trace::{Scratch, Tracer, CHUNK_PHOTONS};
+use crate::{Error, Result};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+/// Photons when neither the command line nor the scene says how many, and no other
+/// criterion can end the run.
+pub const DEFAULT_PHOTONS: u64 = 1_000_000;
+
+/// How a run is made and when it stops. `None` criteria are off.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    pub photons: Option<u64>,
+    pub time_limit_s: Option<f64>,
+    pub target_error: Option<f64>,
+    pub target: Option<String>,
+    pub absolute: bool,
+    pub min_hits: Option<u64>,
+    pub seed: u64,
+    pub threads: usize,
+    pub backend: Backend,
+}
+
+impl RunOptions {
+    /// The scene's `[simulation]` settings, for the command line to override.
+    pub fn from_scene(scene: &Scene) -> RunOptions {
+        let s = &scene.simulation;
+        RunOptions {
+            photons: s.photons,
+            time_limit_s: s.time_limit_s,
+            target_error: s.target_error,
+            target: s.target.clone(),
+            absolute: s.absolute,
+            min_hits: s.min_hits,
+            seed: s.seed,
+            threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            backend: Backend::Embree,
+        }
+    }
+}
+
+/// Called after every epoch with the run's state (progress display, periodic saving).
+pub trait Observer {
+    fn epoch(&mut self, state: &RunState<'_>);
+}
+
+impl Observer for () {
+    fn epoch(&mut self, _: &RunState<'_>) {}
+}
+
+/// The state of a run after an epoch.
+pub struct RunState<'a> {
+    pub scene: &'a Scene,
+    pub options: &'a RunOptions,
+    pub target: &'a Target,
+    pub tallies: &'a Tallies,
+    pub history: &'a [HistoryPoint],
+    pub forecast: Option<Forecast>,
+    pub elapsed_s: f64,
+    pub setup_s: f64,
+    pub total_flux_lm: f64,
+    pub bounce_cap: u32,
+    pub light_flux_lm: &'a [f64],
+    pub threads: usize,
+    /// Set on the last epoch.
+    pub stop_reason: Option<StopReason>,
+}
+
+/// What a finished run hands to the outputs.
+pub struct RunResult {
+    pub tallies: Tallies,
+    pub history: Vec<HistoryPoint>,
+    pub forecast: Option<Forecast>,
+    pub target: Target,
+    pub stop_reason: StopReason,
+    pub elapsed_s: f64,
+    pub setup_s: f64,
+    pub total_flux_lm: f64,
+    pub light_flux_lm: Vec<f64>,
+    pub bounce_cap: u32,
+    pub threads: usize,
+}
+
+impl RunResult {
+    /// The finished run seen as its last state, for the outputs.
+    pub fn state<'a>(&'a self, scene: &'a Scene, options: &'a RunOptions) -> RunState<'a> {
+        RunState {
+            scene,
+            options,
+            target: &self.target,
+            tallies: &self.tallies,
+            history: &self.history,
+            forecast: self.forecast,
+            elapsed_s: self.elapsed_s,
+            setup_s: self.setup_s,
+            total_flux_lm: self.total_flux_lm,
+            bounce_cap: self.bounce_cap,
+            light_flux_lm: &self.light_flux_lm,
+            threads: self.threads,
+            stop_reason: Some(self.stop_reason),
+        }
+    }
+}
+
+/// Runs the photon pass until a stop criterion is met or `interrupt` is set.
+pub fn run(scene: &Scene, options: &RunOptions, interrupt: &AtomicBool, observer: &mut dyn Observer) -> Result<RunResult> {
+    let setup = Instant::now();
+    let caster = accel::build(options.backend, &scene.geometry)?;
+    run_with(scene, options, caster.as_ref(), setup, interrupt, observer)
+}
+
+/// [`run`] over a ray caster already built (`setup` is when building started).
+pub fn run_with(
+    scene: &Scene,
+    options: &RunOptions,
+    caster: &dyn RayCaster,
+    setup: Instant,
+    interrupt: &AtomicBool,
+    observer: &mut dyn Observer,
+) -> Result<RunResult> {
+    let target = match &options.target {
+        Some(t) => Target::parse(t, &scene.receivers)?,
+        None if scene.receivers.is_empty() => Target::Global,
+        None => Target::Receiver { index: 0 },
+    };
+    if options.min_hits.is_some() && target == Target::Global {
+        return Err(Error::input("--min-hits", "needs a receiver target (--target receiver:NAME)"));
+    }
+    if let Some(e) = options.target_error {
+        if !(e > 0.0 && e.is_finite()) {
+            return Err(Error::input("--target-error", format!("{e} is not a positive number")));
+        }
+    }
+    if let Some(t) = options.time_limit_s {
+        if !(t > 0.0 && t.is_finite()) {
+            return Err(Error::input("--time-limit", format!("{t} is not a positive number of seconds")));
+        }
+    }
+    if let Some(r) = scene.receivers.iter().find(|r| r.estimator == crate::scene::Estimator::NextEvent) {
+        return Err(Error::Unsupported(format!(
+            "receiver `{}`: estimator = \"next_event\" is not implemented yet (use \"track\" or \"auto\")",
+            r.name
+        )));
+    }
+    let open_ended = options.time_limit_s.is_none() && options.target_error.is_none() && options.min_hits.is_none();
+    let max_photons = options
+        .photons
+        .or(open_ended.then_some(DEFAULT_PHOTONS))
+        .unwrap_or(u64::MAX);
+    if max_photons == 0 {
+        return Err(Error::input("--photons", "must be at least 1"));
+    }
+    let threads = options.threads.max(1);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
+    let tracer = Tracer::new(scene, caster, options.seed);
+    let total_flux_lm = tracer.emitters.total_flux_lm;
+    let mut tallies = Tallies::new(scene.geometry.triangle_count(), tracer.cell_count());
+    let mut history: Vec<HistoryPoint> = Vec::new();
+    let mut latest_forecast = None;
+    let setup_s = setup.elapsed().as_secs_f64();
+
+    let start = Instant::now();
+    let mut epoch_photons = CHUNK_PHOTONS * threads as u64;
+    let stop_reason = loop {
+        let count = epoch_photons.min(max_photons - tallies.photons);
+        let epoch_start = Instant::now();
+        let chunks: Vec<(u64, u32)> = (0..count.div_ceil(CHUNK_PHOTONS))
+            .map(|c| {
+                let first = tallies.photons + c * CHUNK_PHOTONS;
+                (first, CHUNK_PHOTONS.min(tallies.photons + count - first) as u32)
+            })
+            .collect();
+        let results: Vec<ChunkTally> = pool.install(|| {
+            chunks
+                .par_iter()
+                .map_init(Scratch::default, |scratch, &(first, n)| tracer.trace_chunk(first, n, scratch))
+                .collect()
+        });
+        for (chunk, &(_, n)) in results.iter().zip(&chunks) {
+            tallies.accumulate(chunk, n as u64);
+        }
+        drop(results);
+        let elapsed_s = start.elapsed().as_secs_f64();
+
+        let error = target_error(scene, &target, &tallies, total_flux_lm, options.absolute);
+        let mut point = HistoryPoint {
+            elapsed_s,
+            photons: tallies.photons,
+            rel_error: error,
+            forecast_s: None,
+            forecast_photons: None,
+        };
+        history.push(point);
+        if let Some(goal) = options.target_error {
+            latest_forecast = forecast(&history, goal);
+            point.forecast_s = latest_forecast.map(|f| f.total_s);
+            point.forecast_photons = latest_forecast.map(|f| f.photons);
+            *history.last_mut().expect("pushed above") = point;
+        }
+
+        let reason = if options.target_error.is_some_and(|goal| error <= goal) {
+            Some(StopReason::TargetError)
+        } else if options.min_hits.is_some_and(|n| {
+            let r = target.receiver().expect("min_hits has a receiver target");
+            min_hits(&target, &scene.receivers, receiver_cells(scene, &tallies, r)) >= n
+        }) {
+            Some(StopReason::MinHits)
+        } else if tallies.photons >= max_photons {
+            Some(StopReason::Photons)
+        } else if options.time_limit_s.is_some_and(|t| elapsed_s >= t) {
+            Some(StopReason::Time)
+        } else if interrupt.load(Ordering::Relaxed) {
+            Some(StopReason::Interrupted)
+        } else {
+            None
+        };
+        observer.epoch(&RunState {
+            scene,
+            options,
+            target: &target,
+            tallies: &tallies,
+            history: &history,
+            forecast: latest_forecast,
+            elapsed_s,
+            setup_s,
+            total_flux_lm,
+            bounce_cap: tracer.max_bounces,
+            light_flux_lm: &tracer.emitters.flux_lm,
+            threads,
+            stop_reason: reason,
+        });
+        if let Some(reason) = reason {
+            break reason;
+        }
+        epoch_photons = next_epoch_photons(count, epoch_start.elapsed().as_secs_f64(), elapsed_s, options.time_limit_s, threads);
+    };
+    Ok(RunResult {
+        tallies,
+        history,
+        forecast: latest_forecast,
+        target,
+        stop_reason,
+        elapsed_s: start.elapsed().as_secs_f64(),
+        setup_s,
+        total_flux_lm,
+        light_flux_lm: tracer.emitters.flux_lm.clone(),
+        bounce_cap: tracer.max_bounces,
+        threads,
+    })
+}
+
+/// The cells of receiver `r` (all receivers' cells are stored back to back).
+fn receiver_cells<'t>(scene: &Scene, tallies: &'t Tallies, r: usize) -> &'t [crate::tally::CellSums] {
+    let first: usize = scene.receivers[..r].iter().map(|x| x.cell_count()).sum();
+    &tallies.cells[first..first + scene.receivers[r].cell_count()]
+}
+
+/// The target's error now: the global map's odd/even error, or the receiver's.
+fn target_error(scene: &Scene, target: &Target, tallies: &Tallies, total_flux_lm: f64, absolute: bool) -> f64 {
+    match target.receiver() {
+        None => {
+            let m = map_stats(tallies, MapKind::Total, &scene.geometry.area_m2, total_flux_lm);
+            if absolute {
+                m.sigma_lx
+            } else {
+                m.rel_error.arithmetic
+            }
+        }
+        Some(r) => receiver_target_error(target, &scene.receivers, receiver_cells(scene, tallies, r), tallies.photons, absolute),
+    }
+}
+
+/// Epoch sizing: each epoch lasts about a quarter of the time run so far (so the first
+/// forecast comes within the first percent of a long run and merging stays a small
+/// share), between 0.05 s and 2 s, and never runs past the time limit by much.
+fn next_epoch_photons(last_count: u64, last_epoch_s: f64, elapsed_s: f64, time_limit_s: Option<f64>, threads: usize) -> u64 {
+    let rate = last_count as f64 / last_epoch_s.max(1e-6);
+    let mut duration = (elapsed_s * 0.25).clamp(0.05, 2.0);
+    if let Some(limit) = time_limit_s {
+        duration = duration.min((limit - elapsed_s).max(0.0));
+    }
+    let chunks = ((rate * duration) / CHUNK_PHOTONS as f64).ceil() as u64;
+    chunks.clamp(threads as u64, 1 << 16) * CHUNK_PHOTONS
+}

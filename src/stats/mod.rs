@@ -1,0 +1,244 @@
+//! Statistics of the tallies: the equations of method.md, evaluated once per epoch.
+//! They only read tallies; they never touch the photon path.
+
+pub mod forecast;
+pub mod stop;
+
+use crate::tally::{CellSums, Tallies, CODES_PER_TRIANGLE};
+
+/// Relative error reported when nothing has been scored yet (value 0): 100 %, so no
+/// relative target can be met by a quantity nothing has reached.
+pub const REL_ERROR_UNKNOWN: f64 = 1.0;
+
+/// Estimate and standard error of one cell from its history moments, N histories
+/// (eqs. 6–7, with the unbiased N/(N−1) variance). Returns (value, sigma) in the score's
+/// unit: value = Σx/N, sigma = sqrt(Var(x)/N).
+pub fn cell_estimate(sum: f64, sum_sq: f64, n: u64) -> (f64, f64) {
+    if n == 0 {
+        return (0.0, 0.0);
+    }
+    let nf = n as f64;
+    let mean = sum / nf;
+    if n == 1 {
+        return (mean, 0.0);
+    }
+    let variance = ((sum_sq / nf - mean * mean) * nf / (nf - 1.0)).max(0.0);
+    (mean, (variance / nf).sqrt())
+}
+
+/// σ_rel of a value (eq. 8), [`REL_ERROR_UNKNOWN`] for a zero value.
+pub fn relative_error(value: f64, sigma: f64) -> f64 {
+    if value > 0.0 {
+        sigma / value
+    } else {
+        REL_ERROR_UNKNOWN
+    }
+}
+
+/// Relative variance of the variance (MCNP's VOV) of a cell's mean from its moments:
+/// Σ(x−x̄)⁴ / (Σ(x−x̄)²)² − 1/N. Below 0.1 the cell's σ can be trusted.
+pub fn variance_of_variance(cell: &CellSums, n: u64) -> f64 {
+    if n < 2 {
+        return 1.0;
+    }
+    let nf = n as f64;
+    let [s1, s2, s3, s4] = cell.moments.map(|m| m.value());
+    let m = s1 / nf;
+    let c2 = s2 - s1 * m;
+    if c2 <= 0.0 {
+        return 1.0;
+    }
+    let c4 = s4 - 4.0 * m * s3 + 6.0 * m * m * s2 - 3.0 * nf * m.powi(4);
+    (c4 / (c2 * c2) - 1.0 / nf).max(0.0)
+}
+
+/// Mean and mean relative error of a set of cells (eq. 9), by both averagings.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Averaged {
+    pub arithmetic: f64,
+    pub quadratic: f64,
+}
+
+/// Receiver (or block) summary per eq. 9: the arithmetic mean value and the RMS σ over
+/// the mean by arithmetic and quadratic averaging of the values.
+pub fn mean_error(values: &[f64], sigmas: &[f64]) -> (f64, Averaged) {
+    if values.is_empty() {
+        return (0.0, Averaged { arithmetic: REL_ERROR_UNKNOWN, quadratic: REL_ERROR_UNKNOWN });
+    }
+    let k = values.len() as f64;
+    let mean = values.iter().sum::<f64>() / k;
+    let quadratic_mean = (values.iter().map(|v| v * v).sum::<f64>() / k).sqrt();
+    let rms_sigma = (sigmas.iter().map(|s| s * s).sum::<f64>() / k).sqrt();
+    (
+        mean,
+        Averaged {
+            arithmetic: relative_error(mean, rms_sigma),
+            quadratic: relative_error(quadratic_mean, rms_sigma),
+        },
+    )
+}
+
+/// Values, errors and hits of one receiver.
+#[derive(Clone, Debug, Default)]
+pub struct ReceiverStats {
+    pub values: Vec<f64>,
+    pub sigma: Vec<f64>,
+    pub hits: Vec<u64>,
+    pub mean: f64,
+    pub rel_error: Averaged,
+    /// RMS σ over the cells (eq. 9's numerator), in the receiver's unit.
+    pub rms_sigma: f64,
+}
+
+/// Per-cell statistics of the cells `cells` of a run with `photons` histories.
+pub fn receiver_stats(cells: &[CellSums], photons: u64) -> ReceiverStats {
+    let mut s = ReceiverStats::default();
+    for c in cells {
+        let (value, sigma) = cell_estimate(c.sum(), c.sum_sq(), photons);
+        s.values.push(value);
+        s.sigma.push(sigma);
+        s.hits.push(c.hits);
+    }
+    (s.mean, s.rel_error) = mean_error(&s.values, &s.sigma);
+    s.rms_sigma = if cells.is_empty() {
+        0.0
+    } else {
+        (s.sigma.iter().map(|x| x * x).sum::<f64>() / cells.len() as f64).sqrt()
+    };
+    s
+}
+
+/// The scene map's illuminance and its odd/even error (method.md §3).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MapStats {
+    /// Area-weighted mean illuminance <E> (arithmetic), lx.
+    pub mean_lx: f64,
+    /// RMS error of the combined map, σ = d/2 (eq. 5 with the /2 correction), lx.
+    pub sigma_lx: f64,
+    /// σ / <E>, with <E> averaged arithmetically and quadratically (eq. 4).
+    pub rel_error: Averaged,
+}
+
+/// Which photon hits a map counts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MapKind {
+    /// Every hit: the total illumination.
+    Total,
+    /// Hits after at least one scattering: the secondary illumination.
+    Indirect,
+}
+
+/// Illuminance of triangle `k` in a map: flux of both faces over the geometric area, from
+/// photons of the given parities (`None`: all), lx.
+pub fn triangle_illuminance_lx(
+    t: &Tallies,
+    kind: MapKind,
+    k: usize,
+    area_m2: f64,
+    total_flux_lm: f64,
+    parity: Option<bool>,
+) -> f64 {
+    let (n_odd, n_even) = t.odd_even_photons();
+    let slots = &t.triangle_hits[k * CODES_PER_TRIANGLE..(k + 1) * CODES_PER_TRIANGLE];
+    let (mut count, mut photons) = (0u64, 0u64);
+    for (slot, &c) in slots.iter().enumerate() {
+        let odd = slot & 1 == 1;
+        let indirect = slot & 2 == 2;
+        if (kind == MapKind::Indirect && !indirect) || parity.is_some_and(|p| p != odd) {
+            continue;
+        }
+        count += c;
+    }
+    for (odd, n) in [(true, n_odd), (false, n_even)] {
+        if parity.is_none_or(|p| p == odd) {
+            photons += n;
+        }
+    }
+    if photons == 0 {
+        return 0.0;
+    }
+    total_flux_lm * count as f64 / (photons as f64 * area_m2)
+}
+
+/// Mean illuminance and odd/even error of a scene map (eqs. 4–5, σ = d/2).
+pub fn map_stats(t: &Tallies, kind: MapKind, areas_m2: &[f64], total_flux_lm: f64) -> MapStats {
+    let total_area: f64 = areas_m2.iter().sum();
+    let (n_odd, n_even) = t.odd_even_photons();
+    if total_area <= 0.0 || t.photons == 0 {
+        return MapStats {
+            rel_error: Averaged { arithmetic: REL_ERROR_UNKNOWN, quadratic: REL_ERROR_UNKNOWN },
+            ..MapStats::default()
+        };
+    }
+    let (mut sum_e, mut sum_e2, mut sum_d2) = (0.0, 0.0, 0.0);
+    for (k, &a) in areas_m2.iter().enumerate() {
+        let e = triangle_illuminance_lx(t, kind, k, a, total_flux_lm, None);
+        sum_e += a * e;
+        sum_e2 += a * e * e;
+        if n_odd > 0 && n_even > 0 {
+            let e_odd = triangle_illuminance_lx(t, kind, k, a, total_flux_lm, Some(true));
+            let e_even = triangle_illuminance_lx(t, kind, k, a, total_flux_lm, Some(false));
+            sum_d2 += a * (e_odd - e_even).powi(2);
+        }
+    }
+    let mean_lx = sum_e / total_area;
+    let quadratic_lx = (sum_e2 / total_area).sqrt();
+    let sigma_lx = if n_odd > 0 && n_even > 0 {
+        0.5 * (sum_d2 / total_area).sqrt()
+    } else {
+        0.0
+    };
+    let unknown = n_odd == 0 || n_even == 0;
+    MapStats {
+        mean_lx,
+        sigma_lx,
+        rel_error: if unknown {
+            Averaged { arithmetic: REL_ERROR_UNKNOWN, quadratic: REL_ERROR_UNKNOWN }
+        } else {
+            Averaged {
+                arithmetic: relative_error(mean_lx, sigma_lx),
+                quadratic: relative_error(quadratic_lx, sigma_lx),
+            }
+        },
+    }
+}
+
+/// Standard error (lx) of the scene's area-weighted mean illuminance Φ·Σk/(N·S), from
+/// the per-history hit counts k (eq. 7 with the whole scene as one cell).
+pub fn mean_illuminance_sigma_lx(t: &Tallies, total_area_m2: f64, total_flux_lm: f64) -> f64 {
+    if total_area_m2 <= 0.0 {
+        return 0.0;
+    }
+    let (_, sigma_hits) = cell_estimate(t.history_hits[0] as f64, t.history_hits[1] as f64, t.photons);
+    total_flux_lm * sigma_hits / total_area_m2
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cell_estimate_matches_textbook_standard_error() {
+        // Scores 0, 2, 4 over N = 3 histories: mean 2, unbiased variance 4, σ = sqrt(4/3).
+        let (m, s) = cell_estimate(6.0, 20.0, 3);
+        assert_eq!(m, 2.0);
+        assert!((s - (4.0f64 / 3.0).sqrt()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn single_hit_cells_follow_one_over_root_n() {
+        // n hits of equal score among N histories: σ_rel → 1/sqrt(n) (eq. 11) for n ≪ N.
+        let (n_hist, n_hits) = (1_000_000u64, 400u64);
+        let (m, s) = cell_estimate(n_hits as f64, n_hits as f64, n_hist);
+        let rel = relative_error(m, s);
+        assert!((rel - 1.0 / (n_hits as f64).sqrt()).abs() < 1e-3 * rel);
+    }
+
+    #[test]
+    fn mean_error_uses_both_averagings() {
+        let (mean, rel) = mean_error(&[1.0, 3.0], &[0.1, 0.1]);
+        assert_eq!(mean, 2.0);
+        assert!((rel.arithmetic - 0.05).abs() < 1e-15);
+        assert!((rel.quadratic - 0.1 / 5f64.sqrt()).abs() < 1e-15);
+    }
+}

@@ -1,0 +1,190 @@
+//! Stop criteria (method.md §5, contract `--target`): they read statistics only, once
+//! per epoch; the first one met ends the run.
+
+use super::{receiver_stats, relative_error, REL_ERROR_UNKNOWN};
+use crate::scene::Receiver;
+use crate::tally::CellSums;
+use crate::{Error, Result};
+
+/// What the error target (and `--min-hits`) applies to.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Target {
+    /// The scene map's odd/even error.
+    Global,
+    /// A receiver's mean error (eq. 9, quadratic averaging).
+    Receiver { index: usize },
+    /// The worst cell of a block of a receiver, half-open ranges i0..i1, j0..j1.
+    Block { index: usize, i: (u32, u32), j: (u32, u32) },
+}
+
+impl Target {
+    /// Parses `global`, `receiver:NAME` or `receiver:NAME[i0..i1,j0..j1]`.
+    pub fn parse(text: &str, receivers: &[Receiver]) -> Result<Target> {
+        let bad = |msg: String| Error::input("--target", msg);
+        if text == "global" {
+            return Ok(Target::Global);
+        }
+        let Some(rest) = text.strip_prefix("receiver:") else {
+            return Err(bad(format!(
+                "`{text}`: expected `global`, `receiver:NAME` or `receiver:NAME[i0..i1,j0..j1]`"
+            )));
+        };
+        let (name, block) = match rest.split_once('[') {
+            Some((name, block)) => (name, Some(block)),
+            None => (rest, None),
+        };
+        let index = receivers
+            .iter()
+            .position(|r| r.name == name)
+            .ok_or_else(|| bad(format!("no receiver named `{name}`")))?;
+        let Some(block) = block else {
+            return Ok(Target::Receiver { index });
+        };
+        let cells = receivers[index].cells;
+        let parse_range = |s: &str, n: u32| -> Result<(u32, u32)> {
+            let (a, b) = s
+                .split_once("..")
+                .ok_or_else(|| bad(format!("`{text}`: range `{s}` is not `a..b`")))?;
+            let a: u32 = a.trim().parse().map_err(|_| bad(format!("`{text}`: `{a}` is not a cell index")))?;
+            let b: u32 = b.trim().parse().map_err(|_| bad(format!("`{text}`: `{b}` is not a cell index")))?;
+            if a >= b || b > n {
+                return Err(bad(format!("`{text}`: range {a}..{b} is empty or beyond the {n} cells")));
+            }
+            Ok((a, b))
+        };
+        let inner = block
+            .strip_suffix(']')
+            .ok_or_else(|| bad(format!("`{text}`: missing `]`")))?;
+        let (ri, rj) = inner
+            .split_once(',')
+            .ok_or_else(|| bad(format!("`{text}`: expected `[i0..i1,j0..j1]`")))?;
+        Ok(Target::Block {
+            index,
+            i: parse_range(ri, cells[0])?,
+            j: parse_range(rj, cells[1])?,
+        })
+    }
+
+    /// The receiver the target reads, if any.
+    pub fn receiver(&self) -> Option<usize> {
+        match *self {
+            Target::Global => None,
+            Target::Receiver { index } | Target::Block { index, .. } => Some(index),
+        }
+    }
+
+    /// Local cell indices (j·nu + i) of the receiver cells the target covers.
+    pub fn cells(&self, receivers: &[Receiver]) -> Vec<usize> {
+        match *self {
+            Target::Global => Vec::new(),
+            Target::Receiver { index } => (0..receivers[index].cell_count()).collect(),
+            Target::Block { index, i, j } => {
+                let nu = receivers[index].cells[0] as usize;
+                (j.0..j.1)
+                    .flat_map(|jj| (i.0..i.1).map(move |ii| jj as usize * nu + ii as usize))
+                    .collect()
+            }
+        }
+    }
+
+    pub fn describe(&self, receivers: &[Receiver]) -> String {
+        match *self {
+            Target::Global => "global".into(),
+            Target::Receiver { index } => format!("receiver:{}", receivers[index].name),
+            Target::Block { index, i, j } => {
+                format!("receiver:{}[{}..{},{}..{}]", receivers[index].name, i.0, i.1, j.0, j.1)
+            }
+        }
+    }
+}
+
+/// The target's current error for a receiver target: relative (eq. 9 quadratic for a
+/// whole receiver, the worst cell's σ_rel for a block) or absolute (RMS σ, or the worst
+/// cell's σ, in the receiver's unit).
+pub fn receiver_target_error(target: &Target, receivers: &[Receiver], cells: &[CellSums], photons: u64, absolute: bool) -> f64 {
+    let cell_ids = target.cells(receivers);
+    let picked: Vec<CellSums> = cell_ids.iter().map(|&c| cells[c]).collect();
+    let stats = receiver_stats(&picked, photons);
+    match (target, absolute) {
+        (Target::Block { .. }, false) => stats
+            .values
+            .iter()
+            .zip(&stats.sigma)
+            .map(|(v, s)| relative_error(*v, *s))
+            .fold(0.0, f64::max),
+        (Target::Block { .. }, true) => stats.sigma.iter().copied().fold(0.0, f64::max),
+        (_, false) => {
+            if picked.is_empty() {
+                REL_ERROR_UNKNOWN
+            } else {
+                stats.rel_error.quadratic
+            }
+        }
+        (_, true) => stats.rms_sigma,
+    }
+}
+
+/// Fewest hits among the target's cells.
+pub fn min_hits(target: &Target, receivers: &[Receiver], cells: &[CellSums]) -> u64 {
+    target
+        .cells(receivers)
+        .iter()
+        .map(|&c| cells[c].hits)
+        .min()
+        .unwrap_or(0)
+}
+
+/// Why a run stopped (summary.json `stop_reason`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StopReason {
+    Photons,
+    Time,
+    TargetError,
+    MinHits,
+    Interrupted,
+}
+
+impl StopReason {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            StopReason::Photons => "photons",
+            StopReason::Time => "time",
+            StopReason::TargetError => "target_error",
+            StopReason::MinHits => "min_hits",
+            StopReason::Interrupted => "interrupted",
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Estimator, Quantity};
+    use glam::DVec3;
+
+    fn receivers() -> Vec<Receiver> {
+        vec![Receiver {
+            name: "desk".into(),
+            corner: DVec3::ZERO,
+            u: DVec3::X,
+            v: DVec3::Y,
+            cells: [8, 4],
+            quantity: Quantity::Illuminance,
+            estimator: Estimator::Auto,
+        }]
+    }
+
+    #[test]
+    fn targets_parse_and_reject_with_a_reason() {
+        let r = receivers();
+        assert_eq!(Target::parse("global", &r).unwrap(), Target::Global);
+        assert_eq!(Target::parse("receiver:desk", &r).unwrap(), Target::Receiver { index: 0 });
+        let block = Target::parse("receiver:desk[2..4,1..3]", &r).unwrap();
+        assert_eq!(block, Target::Block { index: 0, i: (2, 4), j: (1, 3) });
+        assert_eq!(block.cells(&r), vec![10, 11, 18, 19]);
+        for bad in ["receiver:chair", "receiver:desk[0..9,0..1]", "receiver:desk[3..3,0..1]", "wall", "receiver:desk[0..1]"] {
+            let e = Target::parse(bad, &r).unwrap_err().to_string();
+            assert!(e.starts_with("--target: "), "{e}");
+        }
+    }
+}

@@ -1,0 +1,235 @@
+//! The photon pass: photons emitted from the lights travel in SoA batches, one bounce
+//! per step for the whole batch, through the backend's batched ray calls:
+//! emit → intersect → score receivers → deposit on triangles → scatter or absorb →
+//! compact survivors → repeat.
+
+pub mod emit;
+pub mod sampling;
+pub mod scatter;
+
+use crate::accel::{HitBatch, RayBatch, RayCaster, NO_HIT};
+use crate::rng::photon_stream;
+use crate::scene::Scene;
+use crate::tally::{deposit_code, ChunkTally, HistoryScore, ReceiverGrid};
+use emit::Emitters;
+use glam::{DVec3, Vec3};
+use rand_pcg::Pcg32;
+use scatter::{offset_origin, scatter, Event, Lobes};
+
+/// Photons traced together as one batch and tallied as one chunk. Chunks are fixed
+/// ranges of photon indices, which keeps the merge order independent of threads.
+pub const CHUNK_PHOTONS: u64 = 4096;
+
+/// Hard bounce cap for lossless materials (albedo 1), where roulette never ends a path.
+pub const MAX_BOUNCES_LOSSLESS: u32 = 100_000;
+
+/// The bounce cap: the number of bounces a photon survives with probability below
+/// 1e-12 at the scene's highest albedo, so the cap cannot bias a result visibly
+/// (ρ = 0.95 gives 539); never below 64, never above [`MAX_BOUNCES_LOSSLESS`].
+pub fn bounce_cap(max_albedo: f64) -> u32 {
+    if max_albedo < 1.0 {
+        let n = (1e-12f64.ln() / max_albedo.max(1e-300).ln()).ceil();
+        n.clamp(64.0, MAX_BOUNCES_LOSSLESS as f64) as u32
+    } else {
+        MAX_BOUNCES_LOSSLESS
+    }
+}
+
+/// Everything a worker needs to trace photons; shared read-only by all workers.
+pub struct Tracer<'a> {
+    caster: &'a dyn RayCaster,
+    vertices: &'a [Vec3],
+    triangles: &'a [[u32; 3]],
+    normals: &'a [Vec3],
+    /// Lobes per triangle's material, looked up through `triangle_material`.
+    lobes: Vec<Lobes>,
+    triangle_material: &'a [u32],
+    pub emitters: Emitters,
+    pub receivers: Vec<ReceiverGrid>,
+    seed: u64,
+    pub max_bounces: u32,
+    /// Largest local coordinate: sizes the ray-origin offset near the frame's origin.
+    scene_scale: f32,
+}
+
+/// Per-worker buffers, reused from chunk to chunk (their contents never affect results).
+#[derive(Default)]
+pub struct Scratch {
+    rays: RayBatch,
+    next_rays: RayBatch,
+    hits: HitBatch,
+    lanes: Vec<Lane>,
+    next_lanes: Vec<Lane>,
+    /// (photon offset in chunk, cell, score) before folding per history.
+    pending: Vec<(u32, u32, f64)>,
+}
+
+/// A live photon's state besides its ray.
+#[derive(Clone)]
+struct Lane {
+    /// Photon index within the chunk.
+    offset: u32,
+    /// Surface hits so far (the first is direct light, the rest indirect).
+    bounces: u32,
+    odd: bool,
+    rng: Pcg32,
+}
+
+impl<'a> Tracer<'a> {
+    pub fn new(scene: &'a Scene, caster: &'a dyn RayCaster, seed: u64) -> Tracer<'a> {
+        let g = &scene.geometry;
+        let mut first_cell = 0u32;
+        let receivers = scene
+            .receivers
+            .iter()
+            .map(|r| {
+                let grid = ReceiverGrid::new(r, g.origin, first_cell);
+                first_cell += grid.cell_count() as u32;
+                grid
+            })
+            .collect();
+        let max_albedo = scene.materials.iter().map(|m| m.albedo()).fold(0.0, f64::max);
+        Tracer {
+            caster,
+            vertices: &g.vertices,
+            triangles: &g.triangles,
+            normals: &g.normal,
+            lobes: scene.materials.iter().map(Lobes::new).collect(),
+            triangle_material: &g.material,
+            emitters: Emitters::new(scene),
+            receivers,
+            seed,
+            max_bounces: bounce_cap(max_albedo),
+            scene_scale: g.vertices.iter().map(|v| v.abs().max_element()).fold(f32::MIN_POSITIVE, f32::max),
+        }
+    }
+
+    /// Total number of receiver cells.
+    pub fn cell_count(&self) -> usize {
+        self.receivers.iter().map(|r| r.cell_count()).sum()
+    }
+
+    /// Traces photons `first .. first + count` to the end of their histories.
+    pub fn trace_chunk(&self, first: u64, count: u32, scratch: &mut Scratch) -> ChunkTally {
+        let mut tally = ChunkTally::default();
+        let flux = self.emitters.total_flux_lm;
+        scratch.rays.clear();
+        scratch.lanes.clear();
+        scratch.pending.clear();
+        if flux > 0.0 {
+            for offset in 0..count {
+                let index = first + offset as u64;
+                let mut rng = photon_stream(self.seed, index);
+                let (o, d) = self.emitters.sample(self.emitters.light_of(index), &mut rng);
+                scratch
+                    .rays
+                    .push(o.as_vec3().into(), d.as_vec3().into(), 0.0, f32::INFINITY);
+                scratch.lanes.push(Lane {
+                    offset,
+                    bounces: 0,
+                    odd: index % 2 == 1,
+                    rng,
+                });
+            }
+        }
+        while !scratch.rays.is_empty() {
+            self.caster.intersect(&scratch.rays, &mut scratch.hits);
+            tally.rays += scratch.rays.len() as u64;
+            self.step(scratch, &mut tally, flux);
+            std::mem::swap(&mut scratch.rays, &mut scratch.next_rays);
+            std::mem::swap(&mut scratch.lanes, &mut scratch.next_lanes);
+        }
+        fold_histories(&mut scratch.pending, &mut tally.scores);
+        tally
+    }
+
+    /// One bounce of every live photon: score, deposit, scatter, compact.
+    fn step(&self, s: &mut Scratch, tally: &mut ChunkTally, flux: f64) {
+        s.next_rays.clear();
+        s.next_lanes.clear();
+        let (rays, hits) = (&s.rays, &s.hits);
+        for (k, lane) in s.lanes.iter_mut().enumerate() {
+            let origin = DVec3::new(rays.ox[k] as f64, rays.oy[k] as f64, rays.oz[k] as f64);
+            let dir = DVec3::new(rays.dx[k] as f64, rays.dy[k] as f64, rays.dz[k] as f64);
+            let tri = hits.tri[k];
+            let t_hit = hits.t[k] as f64;
+            for r in &self.receivers {
+                if let Some(c) = r.crossing(origin, dir, t_hit) {
+                    s.pending.push((lane.offset, c.cell, c.score_per_lm * flux));
+                }
+            }
+            if tri == NO_HIT {
+                tally.record_history_hits(lane.bounces);
+                continue;
+            }
+            let normal = self.normals[tri as usize];
+            let back_face = dir.dot(normal.as_dvec3()) > 0.0;
+            tally
+                .deposits
+                .push(deposit_code(tri, back_face, lane.bounces > 0, lane.odd));
+            if lane.bounces >= self.max_bounces {
+                tally.killed_by_bounce_cap += 1;
+                tally.record_history_hits(lane.bounces + 1);
+                continue;
+            }
+            let lobes = &self.lobes[self.triangle_material[tri as usize] as usize];
+            let Event::Scattered { dir: new_dir, transmitted, .. } =
+                scatter(lobes, dir, normal.as_dvec3(), &mut lane.rng)
+            else {
+                tally.record_history_hits(lane.bounces + 1);
+                continue;
+            };
+            // Hit point from barycentrics: its error scales with the vertices, which
+            // the origin offset is sized for.
+            let [a, b, c] = self.triangles[tri as usize].map(|i| self.vertices[i as usize]);
+            let p = a + (b - a) * hits.u[k] + (c - a) * hits.v[k];
+            let leave_side = if back_face != transmitted { -normal } else { normal };
+            let o = offset_origin(p, leave_side, self.scene_scale);
+            s.next_rays
+                .push(o.into(), new_dir.as_vec3().into(), 0.0, f32::INFINITY);
+            s.next_lanes.push(Lane {
+                bounces: lane.bounces + 1,
+                ..lane.clone()
+            });
+        }
+    }
+}
+
+/// Sums each photon history's scores per cell (a photon crossing a cell twice scores once,
+/// with the sum), so Σx² is over histories as eqs. 6–8 require.
+fn fold_histories(pending: &mut [(u32, u32, f64)], out: &mut Vec<HistoryScore>) {
+    pending.sort_by_key(|&(offset, cell, _)| (offset, cell));
+    let mut last: Option<(u32, u32)> = None;
+    for &(offset, cell, score) in pending.iter() {
+        match out.last_mut() {
+            Some(h) if last == Some((offset, cell)) => {
+                h.score += score;
+                h.hits += 1;
+            }
+            _ => out.push(HistoryScore { cell, hits: 1, score }),
+        }
+        last = Some((offset, cell));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bounce_cap_cannot_bias_a_bright_room() {
+        assert_eq!(bounce_cap(0.95), 539);
+        assert!(0.95f64.powi(bounce_cap(0.95) as i32) < 1e-12);
+        assert_eq!(bounce_cap(0.0), 64);
+        assert_eq!(bounce_cap(1.0), MAX_BOUNCES_LOSSLESS);
+    }
+
+    #[test]
+    fn histories_fold_per_photon_and_cell() {
+        let mut pending = vec![(1, 5, 1.0), (0, 5, 2.0), (1, 5, 3.0), (1, 2, 4.0)];
+        let mut out = Vec::new();
+        fold_histories(&mut pending, &mut out);
+        let got: Vec<(u32, u32, f64)> = out.iter().map(|h| (h.cell, h.hits, h.score)).collect();
+        assert_eq!(got, vec![(5, 1, 2.0), (2, 1, 4.0), (5, 2, 4.0)]);
+    }
+}
