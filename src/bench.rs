@@ -69,11 +69,12 @@ pub fn procedural_geometry(min_triangles: usize) -> Geometry {
         let at = |k: usize, s: usize| base + (k * seg + s % seg) as u32;
         for k in 0..rings {
             for s in 0..seg {
-                // The first and last rings' degenerate halves are dropped by `from_world`.
-                if k != 0 {
+                // Quads between two rings; fans at the poles.
+                // Skip the halves that collapse onto a pole.
+                if k + 1 != rings {
                     tris.push([at(k, s), at(k + 1, s), at(k + 1, s + 1)]);
                 }
-                if k + 1 != rings {
+                if k != 0 {
                     tris.push([at(k, s), at(k + 1, s + 1), at(k, s + 1)]);
                 }
             }

@@ -12,6 +12,14 @@ use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 use std::time::Duration;
 
+/// obvhs's node test clamps the entry distance to an absolute `t >= 1e-4`
+/// (`cwbvh::node::EPSILON`), so boxes the ray leaves within 1e-4 direction lengths are
+/// skipped and hits closer than that are lost (a photon leaving a surface next to a
+/// small triangle). Tracing with the direction scaled by 2⁻¹⁶ moves that cut-off to
+/// 1.5e-9 direction lengths; a power of two scales t, tnear and tfar exactly, and the
+/// barycentrics not at all.
+const DIR_SCALE: f32 = 1.0 / 65536.0;
+
 /// A triangle prepared for the intersection test: a vertex and the two edges from it.
 #[derive(Clone, Copy)]
 struct PreTri {
@@ -99,11 +107,32 @@ impl ObvhsScene {
         }
     }
 
+    /// The obvhs ray for ray `i`, its direction shortened by `DIR_SCALE` (see there).
     #[inline(always)]
     fn ray(rays: &RayBatch, i: usize) -> Ray {
         let o = Vec3A::new(rays.ox[i], rays.oy[i], rays.oz[i]);
-        let d = Vec3A::new(rays.dx[i], rays.dy[i], rays.dz[i]);
-        Ray::new(o, d, rays.tnear[i], rays.tfar[i])
+        let d = Vec3A::new(rays.dx[i], rays.dy[i], rays.dz[i]) * DIR_SCALE;
+        // Not `Ray::new`: its `safe_inverse` clamps components below f32::EPSILON,
+        // which the scaled direction has plenty of. Ours clamps far lower, and keeps the
+        // slab products in the node test finite.
+        let inv = |x: f32| {
+            if x.abs() <= 1e-20 {
+                if x.is_sign_negative() {
+                    -1e20
+                } else {
+                    1e20
+                }
+            } else {
+                1.0 / x
+            }
+        };
+        Ray {
+            origin: o,
+            direction: d,
+            inv_direction: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
+            tmin: rays.tnear[i] / DIR_SCALE,
+            tmax: rays.tfar[i] / DIR_SCALE,
+        }
     }
 }
 
@@ -139,7 +168,7 @@ impl RayCaster for ObvhsScene {
             .unwrap_or((hit.t, 0.0, 0.0));
             let id = self.bvh.primitive_indices[k];
             let n = self.normals.get(id as usize).copied().unwrap_or(Vec3::ZERO);
-            hits.t[i] = t;
+            hits.t[i] = t * DIR_SCALE;
             hits.tri[i] = id;
             hits.u[i] = u;
             hits.v[i] = v;
