@@ -7,6 +7,7 @@
 //! method.md, forecast, stop criteria) → `output` (summary.json and files).
 
 pub mod accel;
+pub mod bench;
 pub mod error;
 pub mod rng;
 pub mod scene;

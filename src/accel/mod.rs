@@ -4,9 +4,9 @@
 //! Rays and hits travel as structures of arrays (SoA) so batches map straight onto
 //! Embree's packets and streams. Coordinates are the scene's re-centred local frame (f32).
 
-pub mod embree;
 #[cfg(feature = "obvhs")]
 pub mod bvh;
+pub mod embree;
 
 use crate::scene::Geometry;
 use crate::{Error, Result};

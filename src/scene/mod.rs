@@ -43,7 +43,10 @@ impl Material {
 
     /// Total albedo: the fraction of incident flux that is not absorbed.
     pub fn albedo(&self) -> f64 {
-        self.reflectance + self.transmittance + self.specular_reflectance + self.specular_transmittance
+        self.reflectance
+            + self.transmittance
+            + self.specular_reflectance
+            + self.specular_transmittance
     }
 
     /// True when the material has a specular lobe (mirror or refraction).
@@ -109,7 +112,10 @@ pub enum LightKind {
     },
     /// Parallel source: `illuminance_lx` on a plane normal to `direction` (unit, the way
     /// the light travels).
-    Directional { direction: DVec3, illuminance_lx: f64 },
+    Directional {
+        direction: DVec3,
+        illuminance_lx: f64,
+    },
     /// One-sided Lambertian parallelogram emitting on the side of u × v.
     Area {
         corner: DVec3,

@@ -1,0 +1,439 @@
+//! Ray-casting benchmarks and the scenes they run on: a procedural scene of any size,
+//! a small OBJ loader for the test meshes, random ray sets, and `bench_rays`, which
+//! times every backend and API against the C reference (`benches/c/embree_reference.c`).
+
+use crate::accel::embree::{sys, EmbreeScene};
+use crate::accel::{HitBatch, RayApi, RayBatch, RayCaster};
+use crate::scene::Geometry;
+use crate::{Error, Result};
+use glam::{DVec3, Vec3};
+use rand::Rng;
+use rayon::prelude::*;
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+/// Rays per parallel work item in the benchmark.
+pub const CHUNK: usize = 4096;
+
+/// A deterministic scene of at least `min_triangles` triangles with real depth
+/// complexity: a bumpy 100 m × 100 m heightfield under a field of overlapping spheres of
+/// different sizes floating at different heights.
+pub fn procedural_geometry(min_triangles: usize) -> Geometry {
+    let mut verts: Vec<DVec3> = Vec::new();
+    let mut tris: Vec<[u32; 3]> = Vec::new();
+
+    // Heightfield: about 40 % of the budget, 2·n² triangles.
+    let n = (((min_triangles as f64 * 0.4) / 2.0).sqrt().ceil() as usize).max(2);
+    let size = 100.0;
+    for j in 0..=n {
+        for i in 0..=n {
+            let x = -size / 2.0 + size * i as f64 / n as f64;
+            let y = -size / 2.0 + size * j as f64 / n as f64;
+            let z = 1.5 * (0.31 * x).sin() * (0.23 * y).cos() + 0.4 * (1.7 * x + 0.9 * y).sin();
+            verts.push(DVec3::new(x, y, z));
+        }
+    }
+    let at = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    for j in 0..n {
+        for i in 0..n {
+            tris.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            tris.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+
+    // Spheres (UV, 48 × 24: 2 208 triangles each) until the budget is reached.
+    let mut rng = crate::rng::aux_stream(0x5eed);
+    let (seg, rings) = (48usize, 24usize);
+    while tris.len() < min_triangles {
+        let c = DVec3::new(
+            rng.random_range(-45.0..45.0),
+            rng.random_range(-45.0..45.0),
+            rng.random_range(0.0..12.0),
+        );
+        let r: f64 = rng.random_range(0.3..4.0);
+        let base = verts.len() as u32;
+        for k in 0..=rings {
+            let theta = std::f64::consts::PI * k as f64 / rings as f64;
+            for s in 0..seg {
+                let phi = std::f64::consts::TAU * s as f64 / seg as f64;
+                let d = DVec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.sin() * phi.sin(),
+                    theta.cos(),
+                );
+                // A little displacement so no two spheres are alike.
+                verts.push(c + d * r * (1.0 + 0.05 * (5.0 * phi).sin() * (3.0 * theta).sin()));
+            }
+        }
+        let at = |k: usize, s: usize| base + (k * seg + s % seg) as u32;
+        for k in 0..rings {
+            for s in 0..seg {
+                // Quads between two rings; fans at the poles.
+                // Skip the halves that collapse onto a pole.
+                if k + 1 != rings {
+                    tris.push([at(k, s), at(k + 1, s), at(k + 1, s + 1)]);
+                }
+                if k != 0 {
+                    tris.push([at(k, s), at(k + 1, s + 1), at(k, s + 1)]);
+                }
+            }
+        }
+    }
+    let zeros = vec![0u32; tris.len()];
+    Geometry::from_world(&verts, &tris, &zeros, &zeros)
+}
+
+/// Loads every mesh of an OBJ file (triangulated) as one `Geometry`, optionally
+/// translated by `offset` in world space.
+pub fn load_obj_geometry(path: &Path, offset: DVec3) -> Result<Geometry> {
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ..Default::default()
+    };
+    let (models, _) = tobj::load_obj(path, &options)
+        .map_err(|e| Error::input(path.display().to_string(), e.to_string()))?;
+    let mut verts = Vec::new();
+    let mut tris = Vec::new();
+    for m in &models {
+        let base = verts.len() as u32;
+        let p = &m.mesh.positions;
+        verts.extend(
+            p.chunks_exact(3)
+                .map(|c| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) + offset),
+        );
+        tris.extend(
+            m.mesh
+                .indices
+                .chunks_exact(3)
+                .map(|c| [base + c[0], base + c[1], base + c[2]]),
+        );
+    }
+    if let Some(bad) = tris.iter().flatten().find(|&&i| i as usize >= verts.len()) {
+        return Err(Error::input(
+            path.display().to_string(),
+            format!("vertex index {bad} out of range ({} vertices)", verts.len()),
+        ));
+    }
+    let zeros = vec![0u32; tris.len()];
+    Ok(Geometry::from_world(&verts, &tris, &zeros, &zeros))
+}
+
+/// Local-frame bounds of the geometry (zero box when empty).
+pub fn local_bounds(g: &Geometry) -> (Vec3, Vec3) {
+    let mut it = g.vertices.iter();
+    let Some(first) = it.next() else {
+        return (Vec3::ZERO, Vec3::ZERO);
+    };
+    it.fold((*first, *first), |(lo, hi), v| (lo.min(*v), hi.max(*v)))
+}
+
+/// Uniform direction on the unit sphere.
+fn random_dir(rng: &mut impl Rng) -> Vec3 {
+    let z: f32 = rng.random_range(-1.0..1.0);
+    let phi: f32 = rng.random_range(0.0..std::f32::consts::TAU);
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// `n` incoherent rays: origins uniform in the bounds, uniform unit directions,
+/// `tnear = 0`, `tfar = ∞`.
+pub fn random_rays(lo: Vec3, hi: Vec3, n: usize, seed: u64) -> RayBatch {
+    let mut rng = crate::rng::aux_stream(seed);
+    let mut rays = RayBatch::with_capacity(n);
+    for _ in 0..n {
+        let o = lo + (hi - lo) * Vec3::new(rng.random(), rng.random(), rng.random());
+        let d = random_dir(&mut rng);
+        rays.push(o.to_array(), d.to_array(), 0.0, f32::INFINITY);
+    }
+    rays
+}
+
+/// `n` shadow rays between two uniform points of the bounds (unit direction,
+/// `tfar` = their distance).
+pub fn random_segments(lo: Vec3, hi: Vec3, n: usize, seed: u64) -> RayBatch {
+    let mut rng = crate::rng::aux_stream(seed);
+    let mut rays = RayBatch::with_capacity(n);
+    while rays.len() < n {
+        let a = lo + (hi - lo) * Vec3::new(rng.random(), rng.random(), rng.random());
+        let b = lo + (hi - lo) * Vec3::new(rng.random(), rng.random(), rng.random());
+        let len = (b - a).length();
+        if len > 0.0 {
+            rays.push(a.to_array(), ((b - a) / len).to_array(), 0.0, len);
+        }
+    }
+    rays
+}
+
+/// Splits a batch into consecutive batches of at most `chunk` rays.
+pub fn split(rays: &RayBatch, chunk: usize) -> Vec<RayBatch> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    while start < rays.len() {
+        let end = (start + chunk).min(rays.len());
+        out.push(RayBatch {
+            ox: rays.ox[start..end].to_vec(),
+            oy: rays.oy[start..end].to_vec(),
+            oz: rays.oz[start..end].to_vec(),
+            dx: rays.dx[start..end].to_vec(),
+            dy: rays.dy[start..end].to_vec(),
+            dz: rays.dz[start..end].to_vec(),
+            tnear: rays.tnear[start..end].to_vec(),
+            tfar: rays.tfar[start..end].to_vec(),
+        });
+        start = end;
+    }
+    out
+}
+
+/// `VmRSS` and `VmHWM` of this process in MiB (0 where /proc is unavailable).
+pub fn memory_mib() -> (f64, f64) {
+    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
+    let field = |name: &str| -> f64 {
+        status
+            .lines()
+            .find_map(|l| l.strip_prefix(name))
+            .and_then(|rest| rest.split_whitespace().next()?.parse::<f64>().ok())
+            .map_or(0.0, |kib| kib / 1024.0)
+    };
+    (field("VmRSS:"), field("VmHWM:"))
+}
+
+/// The SoA rays as the C reference reads them.
+#[repr(C)]
+struct CRays {
+    ox: *const f32,
+    oy: *const f32,
+    oz: *const f32,
+    dx: *const f32,
+    dy: *const f32,
+    dz: *const f32,
+    tnear: *const f32,
+    tfar: *const f32,
+}
+
+/// The outputs the C reference writes.
+#[repr(C)]
+struct CHits {
+    t: *mut f32,
+    u: *mut f32,
+    v: *mut f32,
+    ngx: *mut f32,
+    ngy: *mut f32,
+    ngz: *mut f32,
+    prim: *mut u32,
+    occluded: *mut u8,
+}
+
+extern "C" {
+    fn luxtally_c_trace(
+        scene: sys::RTCScene,
+        rays: *const CRays,
+        hits: *mut CHits,
+        n: usize,
+        api: i32,
+        occlusion: i32,
+        iterations: i32,
+    ) -> f64;
+}
+
+/// Mrays/s of the C reference over `rays` on one thread (best of `iterations`).
+fn c_mrays(
+    scene: &EmbreeScene,
+    rays: &RayBatch,
+    api: RayApi,
+    occlusion: bool,
+    iterations: i32,
+) -> f64 {
+    let n = rays.len();
+    let mut hits = HitBatch::default();
+    hits.reset(n);
+    let mut occ = vec![0u8; n];
+    let c_rays = CRays {
+        ox: rays.ox.as_ptr(),
+        oy: rays.oy.as_ptr(),
+        oz: rays.oz.as_ptr(),
+        dx: rays.dx.as_ptr(),
+        dy: rays.dy.as_ptr(),
+        dz: rays.dz.as_ptr(),
+        tnear: rays.tnear.as_ptr(),
+        tfar: rays.tfar.as_ptr(),
+    };
+    let mut c_hits = CHits {
+        t: hits.t.as_mut_ptr(),
+        u: hits.u.as_mut_ptr(),
+        v: hits.v.as_mut_ptr(),
+        ngx: hits.ngx.as_mut_ptr(),
+        ngy: hits.ngy.as_mut_ptr(),
+        ngz: hits.ngz.as_mut_ptr(),
+        prim: hits.tri.as_mut_ptr(),
+        occluded: occ.as_mut_ptr(),
+    };
+    let api = match api {
+        RayApi::Single => 0,
+        RayApi::Packet8 => 1,
+        RayApi::Packet16 => 2,
+        RayApi::Stream => 3,
+    };
+    // SAFETY: the scene is committed and outlives the call; every array holds `n`
+    // elements and is not otherwise accessed during the call.
+    let seconds = unsafe {
+        luxtally_c_trace(
+            scene.raw_scene(),
+            &c_rays,
+            &mut c_hits,
+            n,
+            api,
+            occlusion as i32,
+            iterations,
+        )
+    };
+    n as f64 / seconds / 1e6
+}
+
+/// Best-of-`iterations` Mrays/s of `caster` through `api` over `chunks`, on the current
+/// thread (`pool == None`) or on every thread of `pool`.
+fn rust_mrays(
+    caster: &dyn RayCaster,
+    api: RayApi,
+    chunks: &[RayBatch],
+    occlusion: bool,
+    pool: Option<&rayon::ThreadPool>,
+    iterations: usize,
+) -> f64 {
+    let n: usize = chunks.iter().map(RayBatch::len).sum();
+    let run_one = |hits: &mut HitBatch, occ: &mut Vec<bool>, b: &RayBatch| {
+        if occlusion {
+            caster.occluded_with(api, b, occ);
+        } else {
+            caster.intersect_with(api, b, hits);
+        }
+    };
+    let mut best = f64::INFINITY;
+    for _ in 0..iterations {
+        let start = Instant::now();
+        match pool {
+            None => {
+                let (mut hits, mut occ) = (HitBatch::default(), Vec::new());
+                for b in chunks {
+                    run_one(&mut hits, &mut occ, b);
+                }
+            }
+            Some(pool) => pool.install(|| {
+                chunks.par_iter().for_each_init(
+                    || (HitBatch::default(), Vec::new()),
+                    |(hits, occ), b| run_one(hits, occ, b),
+                )
+            }),
+        }
+        best = best.min(start.elapsed().as_secs_f64());
+    }
+    n as f64 / best / 1e6
+}
+
+/// Times every backend and API on `rays` random closest-hit rays and as many shadow
+/// rays over `geometry`, on 1 and on `threads` threads, plus the C reference; returns
+/// a Markdown section.
+pub fn bench_rays(
+    geometry: &Geometry,
+    label: &str,
+    rays: usize,
+    threads: usize,
+    obvhs: bool,
+) -> Result<String> {
+    let iterations = 3;
+    let (lo, hi) = local_bounds(geometry);
+    let closest = random_rays(lo, hi, rays, 1);
+    let shadow = random_segments(lo, hi, rays, 2);
+    let (closest_chunks, shadow_chunks) = (split(&closest, CHUNK), split(&shadow, CHUNK));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.max(1))
+        .build()
+        .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
+
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "### {label}: {} triangles, {rays} rays per measurement\n",
+        geometry.triangle_count()
+    );
+
+    let (rss0, _) = memory_mib();
+    let start = Instant::now();
+    let embree = EmbreeScene::new(geometry)?;
+    let embree_build = start.elapsed().as_secs_f64();
+    let (rss1, hwm1) = memory_mib();
+    let mut builds = vec![format!(
+        "embree build {:.3} s, +{:.0} MiB RSS (process peak {:.0} MiB)",
+        embree_build,
+        rss1 - rss0,
+        hwm1
+    )];
+
+    let _ = writeln!(
+        out,
+        "| backend | API | closest 1T | closest {threads}T | occlusion 1T | occlusion {threads}T | C closest 1T | Rust/C closest | C occlusion 1T | Rust/C occlusion |"
+    );
+    let _ = writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let (mut best_closest, mut best_occl) = (0.0f64, 0.0f64);
+    for api in RayApi::ALL {
+        let c1 = rust_mrays(&embree, api, &closest_chunks, false, None, iterations);
+        let cn = rust_mrays(
+            &embree,
+            api,
+            &closest_chunks,
+            false,
+            Some(&pool),
+            iterations,
+        );
+        let o1 = rust_mrays(&embree, api, &shadow_chunks, true, None, iterations);
+        let on = rust_mrays(&embree, api, &shadow_chunks, true, Some(&pool), iterations);
+        let cc = c_mrays(&embree, &closest, api, false, iterations as i32);
+        let co = c_mrays(&embree, &shadow, api, true, iterations as i32);
+        best_closest = best_closest.max(c1);
+        best_occl = best_occl.max(o1);
+        let _ = writeln!(
+            out,
+            "| embree | {} | {c1:.2} | {cn:.2} | {o1:.2} | {on:.2} | {cc:.2} | {:.3} | {co:.2} | {:.3} |",
+            api.name(),
+            c1 / cc,
+            o1 / co
+        );
+    }
+    drop(embree);
+
+    #[cfg(feature = "obvhs")]
+    if obvhs {
+        let (rss0, _) = memory_mib();
+        let start = Instant::now();
+        let bvh = crate::accel::bvh::ObvhsScene::new(geometry);
+        let build = start.elapsed().as_secs_f64();
+        let (rss1, hwm1) = memory_mib();
+        builds.push(format!(
+            "obvhs build {build:.3} s, +{:.0} MiB RSS (process peak {hwm1:.0} MiB)",
+            rss1 - rss0
+        ));
+        let api = RayApi::Single;
+        let c1 = rust_mrays(&bvh, api, &closest_chunks, false, None, iterations);
+        let cn = rust_mrays(&bvh, api, &closest_chunks, false, Some(&pool), iterations);
+        let o1 = rust_mrays(&bvh, api, &shadow_chunks, true, None, iterations);
+        let on = rust_mrays(&bvh, api, &shadow_chunks, true, Some(&pool), iterations);
+        let _ = writeln!(
+            out,
+            "| obvhs | one ray at a time | {c1:.2} | {cn:.2} | {o1:.2} | {on:.2} | – | – | – | – |"
+        );
+        builds.push(format!(
+            "Embree (best API) / obvhs, 1 thread: closest {:.2}×, occlusion {:.2}×",
+            best_closest / c1,
+            best_occl / o1
+        ));
+    }
+    #[cfg(not(feature = "obvhs"))]
+    if obvhs {
+        builds.push("obvhs: not in this build (feature `obvhs`)".into());
+    }
+
+    let _ = writeln!(out, "\nFigures in Mrays/s. {}.\n", builds.join("; "));
+    Ok(out)
+}
