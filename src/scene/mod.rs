@@ -7,6 +7,13 @@
 use glam::{DVec3, Vec3};
 use std::path::PathBuf;
 
+pub mod file;
+mod load;
+pub mod mesh_io;
+pub mod shapes;
+
+pub use load::{load, load_str};
+
 /// A material: any mix of Lambertian reflection/transmission and ideal specular
 /// reflection/refraction. The fractions sum to at most 1; the rest is absorbed.
 #[derive(Clone, Debug, PartialEq)]
@@ -43,7 +50,10 @@ impl Material {
 
     /// Total albedo: the fraction of incident flux that is not absorbed.
     pub fn albedo(&self) -> f64 {
-        self.reflectance + self.transmittance + self.specular_reflectance + self.specular_transmittance
+        self.reflectance
+            + self.transmittance
+            + self.specular_reflectance
+            + self.specular_transmittance
     }
 
     /// True when the material has a specular lobe (mirror or refraction).
@@ -109,7 +119,10 @@ pub enum LightKind {
     },
     /// Parallel source: `illuminance_lx` on a plane normal to `direction` (unit, the way
     /// the light travels).
-    Directional { direction: DVec3, illuminance_lx: f64 },
+    Directional {
+        direction: DVec3,
+        illuminance_lx: f64,
+    },
     /// One-sided Lambertian parallelogram emitting on the side of u × v.
     Area {
         corner: DVec3,
