@@ -134,6 +134,8 @@ fn validate_material(m: &Material, at: &str) -> Result<()> {
     // A little slack so that fractions written in decimal (0.7 + 0.2 + 0.1) sum to 1.
     let total = m.albedo();
     if total > 1.0 + 1e-9 {
+        // Rounded so that 0.8 + 0.4 reads 1.2, not 1.2000000000000002.
+        let total = (total * 1e9).round() / 1e9;
         return Err(Error::input(
             at,
             format!("energy-creating material: reflectance + transmittance + specular parts = {total} > 1"),
