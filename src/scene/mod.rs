@@ -7,6 +7,13 @@
 use glam::{DVec3, Vec3};
 use std::path::PathBuf;
 
+pub mod file;
+mod load;
+pub mod mesh_io;
+pub mod shapes;
+
+pub use load::{load, load_str};
+
 /// A material: any mix of Lambertian reflection/transmission and ideal specular
 /// reflection/refraction. The fractions sum to at most 1; the rest is absorbed.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,0 +1,206 @@
+//! The scene file as written: serde structs mirroring the TOML of the contract, and the
+//! TOML front end (syntax errors, non-finite numbers, per-entry deserialisation with a key
+//! path). Nothing here checks physics; `load` validates and converts.
+
+use crate::error::{Error, Result};
+use serde::de::DeserializeOwned;
+use serde::Deserialize;
+
+/// The top level. Entries stay raw `toml::Value`s so each one is deserialised with its own
+/// key path (`objects[2]`) for messages: serde does not report array indices.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    pub name: Option<String>,
+    #[serde(default)]
+    pub materials: toml::Table,
+    #[serde(default)]
+    pub objects: Vec<toml::Value>,
+    #[serde(default)]
+    pub lights: Vec<toml::Value>,
+    #[serde(default)]
+    pub receivers: Vec<toml::Value>,
+    pub simulation: Option<toml::Value>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialFile {
+    #[serde(default)]
+    pub reflectance: f64,
+    #[serde(default)]
+    pub transmittance: f64,
+    #[serde(default)]
+    pub specular_reflectance: f64,
+    #[serde(default)]
+    pub specular_transmittance: f64,
+    #[serde(default = "default_ior")]
+    pub ior: f64,
+}
+
+fn default_ior() -> f64 {
+    1.5
+}
+
+/// `scale = 2` or `scale = [1, 2, 1]`.
+#[derive(Deserialize, Debug, Clone, Copy)]
+#[serde(untagged)]
+pub enum ScaleFile {
+    Uniform(f64),
+    PerAxis([f64; 3]),
+}
+
+/// One `[[objects]]` entry. All shape parameters are optional here; `load` checks that the
+/// ones the shape needs are present and that no other shape's parameters are set.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectFile {
+    pub shape: Option<String>,
+    pub file: Option<String>,
+    pub material: Option<String>,
+    pub min: Option<[f64; 3]>,
+    pub max: Option<[f64; 3]>,
+    pub corner: Option<[f64; 3]>,
+    pub u: Option<[f64; 3]>,
+    pub v: Option<[f64; 3]>,
+    pub center: Option<[f64; 3]>,
+    pub radius: Option<f64>,
+    pub subdivisions: Option<u32>,
+    pub scale: Option<ScaleFile>,
+    pub rotate_deg: Option<[f64; 3]>,
+    pub translate: Option<[f64; 3]>,
+}
+
+/// One `[[lights]]` entry; `type` selects which fields are required.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct LightFile {
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub position: Option<[f64; 3]>,
+    pub direction: Option<[f64; 3]>,
+    pub intensity_cd: Option<f64>,
+    pub flux_lm: Option<f64>,
+    pub cone_deg: Option<f64>,
+    pub falloff_deg: Option<f64>,
+    pub illuminance_lx: Option<f64>,
+    pub corner: Option<[f64; 3]>,
+    pub u: Option<[f64; 3]>,
+    pub v: Option<[f64; 3]>,
+    pub luminance_cdm2: Option<f64>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct ReceiverFile {
+    pub name: String,
+    pub corner: [f64; 3],
+    pub u: [f64; 3],
+    pub v: [f64; 3],
+    pub cells: [u32; 2],
+    pub quantity: Option<String>,
+    pub view_direction: Option<[f64; 3]>,
+    pub half_angle_deg: Option<f64>,
+    pub estimator: Option<String>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationFile {
+    pub photons: Option<u64>,
+    pub seed: Option<u64>,
+    pub time_limit: Option<f64>,
+    pub target_error: Option<f64>,
+    pub target: Option<String>,
+    #[serde(default)]
+    pub absolute: bool,
+    pub min_hits: Option<u64>,
+}
+
+/// Collapses a possibly multi-line message into one line.
+pub fn one_line(text: &str) -> String {
+    text.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Parses the TOML text, rejects non-finite numbers, and deserialises the top level.
+pub fn parse(text: &str, origin: &str) -> Result<SceneFile> {
+    let table: toml::Table = toml::from_str(text).map_err(|e| syntax_error(text, origin, &e))?;
+    let mut path = String::new();
+    check_finite(&toml::Value::Table(table.clone()), &mut path, origin)?;
+    entry(toml::Value::Table(table), origin, "")
+}
+
+/// `office.toml: line 3, column 7: invalid float` from toml's multi-line report.
+fn syntax_error(text: &str, origin: &str, e: &toml::de::Error) -> Error {
+    let message = one_line(e.message());
+    match e.span() {
+        Some(span) => {
+            let before = text.get(..span.start).unwrap_or(text);
+            let line = before.matches('\n').count() + 1;
+            let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+            Error::input(origin, format!("line {line}, column {column}: {message}"))
+        }
+        None => Error::input(origin, message),
+    }
+}
+
+/// TOML allows `nan` and `inf`; no scene quantity may be either. Names the key path.
+fn check_finite(value: &toml::Value, path: &mut String, origin: &str) -> Result<()> {
+    match value {
+        toml::Value::Float(x) if !x.is_finite() => Err(Error::input(
+            format!("{origin}: {path}"),
+            "value is not finite",
+        )),
+        toml::Value::Array(items) => {
+            // A vector is reported as a whole (`lights[0].position`); arrays of tables
+            // by element (`objects[2].radius`).
+            for (i, item) in items.iter().enumerate() {
+                let len = path.len();
+                if item.is_table() {
+                    path.push_str(&format!("[{i}]"));
+                }
+                check_finite(item, path, origin)?;
+                path.truncate(len);
+            }
+            Ok(())
+        }
+        toml::Value::Table(table) => {
+            for (key, item) in table {
+                let len = path.len();
+                if !path.is_empty() {
+                    path.push('.');
+                }
+                path.push_str(key);
+                check_finite(item, path, origin)?;
+                path.truncate(len);
+            }
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Deserialises one entry at key path `path`; serde's message names the field, and toml
+/// records the field's key for type errors, which is appended to the path.
+pub fn entry<T: DeserializeOwned>(value: toml::Value, origin: &str, path: &str) -> Result<T> {
+    value.try_into::<T>().map_err(|e| {
+        // toml's Display ends with "in `key.sub`" when it knows the field.
+        let shown = e.to_string();
+        let key = shown
+            .lines()
+            .filter_map(|l| l.strip_prefix("in `").and_then(|l| l.strip_suffix('`')))
+            .next_back();
+        let full = match (path.is_empty(), key) {
+            (true, None) => String::new(),
+            (true, Some(k)) => k.to_string(),
+            (false, None) => path.to_string(),
+            (false, Some(k)) => format!("{path}.{k}"),
+        };
+        let message = one_line(e.message());
+        if full.is_empty() {
+            Error::input(origin, message)
+        } else {
+            Error::input(format!("{origin}: {full}"), message)
+        }
+    })
+}

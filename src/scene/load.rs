@@ -1,0 +1,632 @@
+//! From the parsed file to a validated `Scene`: materials, objects (shapes and mesh files,
+//! transformed and merged into one `Geometry`), lights, receivers and `[simulation]`.
+//! Every check names the file and the key at fault.
+
+use super::file::{
+    self, LightFile, MaterialFile, ObjectFile, ReceiverFile, ScaleFile, SimulationFile,
+};
+use super::mesh_io;
+use super::shapes::{self, Mesh, Transform};
+use super::{
+    Estimator, Geometry, Light, LightKind, Material, Quantity, Receiver, Scene, Simulation,
+};
+use crate::error::{Error, Result};
+use glam::DVec3;
+use std::path::{Path, PathBuf};
+
+/// Loads and validates the scene file at `path`; relative mesh paths resolve against its
+/// directory.
+pub fn load(path: &Path) -> Result<Scene> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let base_dir = path.parent().unwrap_or(Path::new(""));
+    let mut scene = load_str(&text, base_dir, &path.display().to_string())?;
+    scene.path = path.to_path_buf();
+    Ok(scene)
+}
+
+/// Loads a scene from TOML text. `origin` (the file name) prefixes every message and gives
+/// the default scene name; relative mesh paths resolve against `base_dir`.
+pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
+    let raw = file::parse(text, origin)?;
+    let at = |key: &str| format!("{origin}: {key}");
+
+    let name = match raw.name {
+        Some(n) if n.trim().is_empty() => return Err(Error::input(at("name"), "empty name")),
+        Some(n) => n,
+        None => Path::new(origin)
+            .file_stem()
+            .map_or_else(|| "scene".to_string(), |s| s.to_string_lossy().into_owned()),
+    };
+
+    let mut materials = Vec::new();
+    for (key, value) in raw.materials {
+        let path = format!("materials.{key}");
+        let m: MaterialFile = file::entry(value, origin, &path)?;
+        let material = Material {
+            name: key,
+            reflectance: m.reflectance,
+            transmittance: m.transmittance,
+            specular_reflectance: m.specular_reflectance,
+            specular_transmittance: m.specular_transmittance,
+            ior: m.ior,
+        };
+        validate_material(&material, &at(&path))?;
+        materials.push(material);
+    }
+
+    let mut builder = GeometryBuilder::default();
+    for (i, value) in raw.objects.into_iter().enumerate() {
+        let path = format!("objects[{i}]");
+        let object: ObjectFile = file::entry(value, origin, &path)?;
+        load_object(&object, i, origin, base_dir, &mut materials, &mut builder)?;
+    }
+    let geometry = builder.finish(origin)?;
+
+    let lights = raw
+        .lights
+        .into_iter()
+        .enumerate()
+        .map(|(i, value)| {
+            let path = format!("lights[{i}]");
+            let light: LightFile = file::entry(value, origin, &path)?;
+            Ok(Light {
+                kind: light_kind(&light, &at(&path))?,
+                label: path,
+            })
+        })
+        .collect::<Result<Vec<_>>>()?;
+
+    let mut receivers: Vec<Receiver> = Vec::new();
+    for (i, value) in raw.receivers.into_iter().enumerate() {
+        let path = format!("receivers[{i}]");
+        let r: ReceiverFile = file::entry(value, origin, &path)?;
+        let receiver = receiver(r, &at(&path))?;
+        if receivers.iter().any(|o| o.name == receiver.name) {
+            return Err(Error::input(
+                at(&format!("{path}.name")),
+                format!("duplicate receiver name `{}`", receiver.name),
+            ));
+        }
+        receivers.push(receiver);
+    }
+
+    let simulation = match raw.simulation {
+        Some(value) => simulation(file::entry(value, origin, "simulation")?, &at("simulation"))?,
+        None => Simulation {
+            seed: 1,
+            ..Simulation::default()
+        },
+    };
+
+    Ok(Scene {
+        name,
+        path: PathBuf::from(origin),
+        materials,
+        geometry,
+        lights,
+        receivers,
+        simulation,
+    })
+}
+
+/// Every fraction finite and ≥ 0, `ior` ≥ 1, and no energy created.
+fn validate_material(m: &Material, at: &str) -> Result<()> {
+    let parts = [
+        ("reflectance", m.reflectance),
+        ("transmittance", m.transmittance),
+        ("specular_reflectance", m.specular_reflectance),
+        ("specular_transmittance", m.specular_transmittance),
+    ];
+    for (key, x) in parts {
+        if !x.is_finite() || x < 0.0 {
+            return Err(Error::input(
+                format!("{at}.{key}"),
+                format!("must be a number ≥ 0, got {x}"),
+            ));
+        }
+    }
+    if !m.ior.is_finite() || m.ior < 1.0 {
+        return Err(Error::input(
+            format!("{at}.ior"),
+            format!("must be ≥ 1, got {}", m.ior),
+        ));
+    }
+    // A little slack so that fractions written in decimal (0.7 + 0.2 + 0.1) sum to 1.
+    let total = m.albedo();
+    if total > 1.0 + 1e-9 {
+        // Rounded so that 0.8 + 0.4 reads 1.2, not 1.2000000000000002.
+        let total = (total * 1e9).round() / 1e9;
+        return Err(Error::input(
+            at,
+            format!("energy-creating material: reflectance + transmittance + specular parts = {total} > 1"),
+        ));
+    }
+    Ok(())
+}
+
+/// Collects every object's triangles in world space, then builds one `Geometry`.
+#[derive(Default)]
+struct GeometryBuilder {
+    vertices: Vec<DVec3>,
+    triangles: Vec<[u32; 3]>,
+    material: Vec<u32>,
+    object: Vec<u32>,
+}
+
+impl GeometryBuilder {
+    fn add(&mut self, mesh: Mesh, materials: &[u32], object: u32, at: &str) -> Result<()> {
+        // Geometry indexes vertices with u32.
+        if self.vertices.len() + mesh.vertices.len() > u32::MAX as usize {
+            return Err(Error::input(
+                at,
+                "too many vertices in the scene (more than 2^32)",
+            ));
+        }
+        let base = self.vertices.len() as u32;
+        self.vertices.extend(mesh.vertices);
+        self.triangles
+            .extend(mesh.triangles.iter().map(|t| t.map(|i| i + base)));
+        self.material.extend_from_slice(materials);
+        self.object
+            .extend(std::iter::repeat_n(object, mesh.triangles.len()));
+        Ok(())
+    }
+
+    fn finish(self, origin: &str) -> Result<Geometry> {
+        if let Some(bad) = self.vertices.iter().find(|v| !v.is_finite()) {
+            return Err(Error::input(
+                origin,
+                format!("object vertex {bad} is not finite after transforms"),
+            ));
+        }
+        Ok(Geometry::from_world(
+            &self.vertices,
+            &self.triangles,
+            &self.material,
+            &self.object,
+        ))
+    }
+}
+
+fn vec3(a: [f64; 3]) -> DVec3 {
+    DVec3::from_array(a)
+}
+
+fn required<T: Copy>(x: Option<T>, at: &str, key: &str, what: &str) -> Result<T> {
+    x.ok_or_else(|| {
+        Error::input(
+            format!("{at}.{key}"),
+            format!("missing (required for {what})"),
+        )
+    })
+}
+
+/// Rejects keys that belong to another shape or light type, so a typo'd shape is loud.
+fn forbid(present: &[(&str, bool)], at: &str, what: &str) -> Result<()> {
+    match present.iter().find(|(_, set)| *set) {
+        Some((key, _)) => Err(Error::input(
+            format!("{at}.{key}"),
+            format!("does not apply to {what}"),
+        )),
+        None => Ok(()),
+    }
+}
+
+fn material_index(materials: &[Material], name: &str) -> Option<u32> {
+    materials
+        .iter()
+        .position(|m| m.name == name)
+        .map(|i| i as u32)
+}
+
+fn load_object(
+    o: &ObjectFile,
+    i: usize,
+    origin: &str,
+    base_dir: &Path,
+    materials: &mut Vec<Material>,
+    builder: &mut GeometryBuilder,
+) -> Result<()> {
+    let at = format!("{origin}: objects[{i}]");
+    let override_material = match &o.material {
+        Some(name) => Some(material_index(materials, name).ok_or_else(|| {
+            Error::input(
+                format!("{at}.material"),
+                format!("unknown material `{name}`"),
+            )
+        })?),
+        None => None,
+    };
+    let transform = transform(o, &at)?;
+
+    let (mut mesh, per_tri) = match (&o.shape, &o.file) {
+        (Some(_), Some(_)) => {
+            return Err(Error::input(&at, "give either `shape` or `file`, not both"));
+        }
+        (None, None) => return Err(Error::input(&at, "needs `shape` or `file`")),
+        (Some(shape), None) => {
+            let material = override_material.ok_or_else(|| {
+                Error::input(
+                    format!("{at}.material"),
+                    format!("missing (required for shape \"{shape}\")"),
+                )
+            })?;
+            let mesh = builtin_shape(o, shape, &at)?;
+            let per_tri = vec![material; mesh.triangles.len()];
+            (mesh, per_tri)
+        }
+        (None, Some(file)) => {
+            forbid(
+                &[
+                    ("min", o.min.is_some()),
+                    ("max", o.max.is_some()),
+                    ("corner", o.corner.is_some()),
+                    ("u", o.u.is_some()),
+                    ("v", o.v.is_some()),
+                    ("center", o.center.is_some()),
+                    ("radius", o.radius.is_some()),
+                    ("subdivisions", o.subdivisions.is_some()),
+                ],
+                &at,
+                "a mesh file",
+            )?;
+            let mesh_path = base_dir.join(file);
+            let loaded = mesh_io::load_mesh(&mesh_path, &format!("{at}.file"))?;
+            let per_tri = match override_material {
+                Some(m) => vec![m; loaded.mesh.triangles.len()],
+                None => file_materials(&loaded, file, &at, materials)?,
+            };
+            (loaded.mesh, per_tri)
+        }
+    };
+    transform.apply(&mut mesh.vertices);
+    builder.add(mesh, &per_tri, i as u32, &at)
+}
+
+/// Turns a mesh file's own materials into scene materials named `FILE:NAME`; a scene
+/// material of that exact name (defined in `[materials]` or by an earlier object) is reused.
+fn file_materials(
+    loaded: &mesh_io::MeshFile,
+    file: &str,
+    at: &str,
+    materials: &mut Vec<Material>,
+) -> Result<Vec<u32>> {
+    let mut scene_index = Vec::with_capacity(loaded.materials.len());
+    for fm in &loaded.materials {
+        let name = format!("{file}:{}", fm.name);
+        let index = match material_index(materials, &name) {
+            Some(k) => k,
+            None => {
+                // Materials the file defines without a colour (NaN) are only an error
+                // if a triangle uses them, which `missing_reason` reports below.
+                let material = Material::lambertian(&name, fm.reflectance);
+                if !fm.reflectance.is_nan() {
+                    validate_material(&material, &format!("{at}.file: material `{}`", fm.name))?;
+                }
+                materials.push(material);
+                (materials.len() - 1) as u32
+            }
+        };
+        scene_index.push(index);
+    }
+    loaded
+        .material
+        .iter()
+        .map(|m| {
+            m.and_then(|k| scene_index.get(k as usize).copied()).ok_or_else(|| {
+                let reason = loaded
+                    .missing_reason
+                    .clone()
+                    .unwrap_or_else(|| "it has no usable material".to_string());
+                Error::input(
+                    format!("{at}.material"),
+                    format!("`{file}` gives no material ({reason}): set `material = \"...\"` on this object"),
+                )
+            })
+        })
+        .collect()
+}
+
+fn transform(o: &ObjectFile, at: &str) -> Result<Transform> {
+    let scale = match o.scale {
+        None => DVec3::ONE,
+        Some(ScaleFile::Uniform(s)) => DVec3::splat(s),
+        Some(ScaleFile::PerAxis(s)) => vec3(s),
+    };
+    if !(scale.cmpgt(DVec3::ZERO).all()) {
+        return Err(Error::input(format!("{at}.scale"), "must be > 0"));
+    }
+    Ok(Transform {
+        scale,
+        rotate_deg: o.rotate_deg.map_or(DVec3::ZERO, vec3),
+        translate: o.translate.map_or(DVec3::ZERO, vec3),
+    })
+}
+
+fn builtin_shape(o: &ObjectFile, shape: &str, at: &str) -> Result<Mesh> {
+    let what = format!("shape \"{shape}\"");
+    let keys = |allowed: &[&str]| {
+        let all = [
+            ("min", o.min.is_some()),
+            ("max", o.max.is_some()),
+            ("corner", o.corner.is_some()),
+            ("u", o.u.is_some()),
+            ("v", o.v.is_some()),
+            ("center", o.center.is_some()),
+            ("radius", o.radius.is_some()),
+            ("subdivisions", o.subdivisions.is_some()),
+        ];
+        let others: Vec<_> = all
+            .into_iter()
+            .filter(|(k, _)| !allowed.contains(k))
+            .collect();
+        forbid(&others, at, &what)
+    };
+    match shape {
+        "box" => {
+            keys(&["min", "max"])?;
+            let min = vec3(required(o.min, at, "min", &what)?);
+            let max = vec3(required(o.max, at, "max", &what)?);
+            if !min.cmplt(max).all() {
+                return Err(Error::input(
+                    format!("{at}.max"),
+                    format!("must exceed min on every axis (min {min}, max {max})"),
+                ));
+            }
+            Ok(shapes::make_box(min, max))
+        }
+        "rect" => {
+            keys(&["corner", "u", "v"])?;
+            let corner = vec3(required(o.corner, at, "corner", &what)?);
+            let u = vec3(required(o.u, at, "u", &what)?);
+            let v = vec3(required(o.v, at, "v", &what)?);
+            if !(u.cross(v).length() > 0.0) {
+                return Err(Error::input(at, "zero-area rect: u × v = 0"));
+            }
+            Ok(shapes::make_rect(corner, u, v))
+        }
+        "sphere" => {
+            keys(&["center", "radius", "subdivisions"])?;
+            let center = vec3(required(o.center, at, "center", &what)?);
+            let radius = required(o.radius, at, "radius", &what)?;
+            if !(radius > 0.0) {
+                return Err(Error::input(
+                    format!("{at}.radius"),
+                    format!("must be > 0, got {radius}"),
+                ));
+            }
+            let subdivisions = o.subdivisions.unwrap_or(3);
+            if subdivisions > 8 {
+                return Err(Error::input(
+                    format!("{at}.subdivisions"),
+                    format!("must be in 0..=8, got {subdivisions}"),
+                ));
+            }
+            Ok(shapes::make_sphere(center, radius, subdivisions))
+        }
+        other => Err(Error::input(
+            format!("{at}.shape"),
+            format!("unknown shape `{other}` (expected \"box\", \"rect\" or \"sphere\")"),
+        )),
+    }
+}
+
+/// A direction the user wrote: normalised, zero rejected.
+fn direction(d: [f64; 3], at: &str, key: &str) -> Result<DVec3> {
+    vec3(d)
+        .try_normalize()
+        .ok_or_else(|| Error::input(format!("{at}.{key}"), "zero direction"))
+}
+
+/// A photometric amount: finite and ≥ 0 (zero is allowed: a switched-off source).
+fn amount(x: f64, at: &str, key: &str) -> Result<f64> {
+    if x.is_finite() && x >= 0.0 {
+        Ok(x)
+    } else {
+        Err(Error::input(
+            format!("{at}.{key}"),
+            format!("must be ≥ 0, got {x}"),
+        ))
+    }
+}
+
+fn light_kind(l: &LightFile, at: &str) -> Result<LightKind> {
+    let what = format!("type \"{}\" lights", l.kind);
+    let set = |allowed: &[&str]| {
+        let all = [
+            ("position", l.position.is_some()),
+            ("direction", l.direction.is_some()),
+            ("intensity_cd", l.intensity_cd.is_some()),
+            ("flux_lm", l.flux_lm.is_some()),
+            ("cone_deg", l.cone_deg.is_some()),
+            ("falloff_deg", l.falloff_deg.is_some()),
+            ("illuminance_lx", l.illuminance_lx.is_some()),
+            ("corner", l.corner.is_some()),
+            ("u", l.u.is_some()),
+            ("v", l.v.is_some()),
+            ("luminance_cdm2", l.luminance_cdm2.is_some()),
+        ];
+        let others: Vec<_> = all
+            .into_iter()
+            .filter(|(k, _)| !allowed.contains(k))
+            .collect();
+        forbid(&others, at, &what)
+    };
+    match l.kind.as_str() {
+        "point" => {
+            set(&["position", "intensity_cd", "flux_lm"])?;
+            let position = vec3(required(l.position, at, "position", &what)?);
+            let intensity_cd = match (l.intensity_cd, l.flux_lm) {
+                (Some(i), None) => amount(i, at, "intensity_cd")?,
+                // Isotropic: Φ = 4π I.
+                (None, Some(f)) => amount(f, at, "flux_lm")? / (4.0 * std::f64::consts::PI),
+                _ => return Err(Error::input(at, "give exactly one of `intensity_cd` and `flux_lm`")),
+            };
+            Ok(LightKind::Point {
+                position,
+                intensity_cd,
+            })
+        }
+        "spot" => {
+            set(&["position", "direction", "intensity_cd", "cone_deg", "falloff_deg"])?;
+            let position = vec3(required(l.position, at, "position", &what)?);
+            let direction = direction(required(l.direction, at, "direction", &what)?, at, "direction")?;
+            let intensity_cd = amount(required(l.intensity_cd, at, "intensity_cd", &what)?, at, "intensity_cd")?;
+            let cone_deg = required(l.cone_deg, at, "cone_deg", &what)?;
+            if !(cone_deg > 0.0 && cone_deg <= 180.0) {
+                return Err(Error::input(format!("{at}.cone_deg"), format!("must be in (0, 180], got {cone_deg}")));
+            }
+            let falloff_deg = l.falloff_deg.unwrap_or(cone_deg);
+            if !(falloff_deg >= 0.0 && falloff_deg <= cone_deg) {
+                return Err(Error::input(
+                    format!("{at}.falloff_deg"),
+                    format!("must be in [0, cone_deg = {cone_deg}], got {falloff_deg}"),
+                ));
+            }
+            Ok(LightKind::Spot {
+                position,
+                direction,
+                intensity_cd,
+                cone_deg,
+                falloff_deg,
+            })
+        }
+        "directional" => {
+            set(&["direction", "illuminance_lx"])?;
+            let direction = direction(required(l.direction, at, "direction", &what)?, at, "direction")?;
+            let illuminance_lx =
+                amount(required(l.illuminance_lx, at, "illuminance_lx", &what)?, at, "illuminance_lx")?;
+            Ok(LightKind::Directional {
+                direction,
+                illuminance_lx,
+            })
+        }
+        "area" => {
+            set(&["corner", "u", "v", "flux_lm", "luminance_cdm2"])?;
+            let corner = vec3(required(l.corner, at, "corner", &what)?);
+            let u = vec3(required(l.u, at, "u", &what)?);
+            let v = vec3(required(l.v, at, "v", &what)?);
+            let area = u.cross(v).length();
+            if !(area > 0.0) {
+                return Err(Error::input(at, "zero-area light: u × v = 0"));
+            }
+            let luminance_cdm2 = match (l.flux_lm, l.luminance_cdm2) {
+                // One-sided Lambertian emitter: Φ = π L A.
+                (Some(f), None) => amount(f, at, "flux_lm")? / (std::f64::consts::PI * area),
+                (None, Some(lum)) => amount(lum, at, "luminance_cdm2")?,
+                _ => return Err(Error::input(at, "give exactly one of `flux_lm` and `luminance_cdm2`")),
+            };
+            Ok(LightKind::Area {
+                corner,
+                u,
+                v,
+                luminance_cdm2,
+            })
+        }
+        other => Err(Error::input(
+            format!("{at}.type"),
+            format!("unknown light type `{other}` (expected \"point\", \"spot\", \"directional\" or \"area\")"),
+        )),
+    }
+}
+
+fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
+    if r.name.trim().is_empty() {
+        return Err(Error::input(format!("{at}.name"), "empty receiver name"));
+    }
+    let (corner, u, v) = (vec3(r.corner), vec3(r.u), vec3(r.v));
+    if !(u.cross(v).length() > 0.0) {
+        return Err(Error::input(at, "zero-area receiver: u × v = 0"));
+    }
+    if r.cells[0] == 0 || r.cells[1] == 0 {
+        return Err(Error::input(
+            format!("{at}.cells"),
+            format!("zero cells: {:?} (each must be ≥ 1)", r.cells),
+        ));
+    }
+    let quantity = match r.quantity.as_deref().unwrap_or("illuminance") {
+        "illuminance" => {
+            if r.view_direction.is_some() || r.half_angle_deg.is_some() {
+                let key = if r.view_direction.is_some() {
+                    "view_direction"
+                } else {
+                    "half_angle_deg"
+                };
+                return Err(Error::input(
+                    format!("{at}.{key}"),
+                    "applies only to quantity = \"luminance\"",
+                ));
+            }
+            Quantity::Illuminance
+        }
+        "luminance" => {
+            let what = "quantity = \"luminance\"";
+            let view_direction = direction(
+                required(r.view_direction, at, "view_direction", what)?,
+                at,
+                "view_direction",
+            )?;
+            let half_angle_deg = required(r.half_angle_deg, at, "half_angle_deg", what)?;
+            if !(half_angle_deg > 0.0 && half_angle_deg <= 90.0) {
+                return Err(Error::input(
+                    format!("{at}.half_angle_deg"),
+                    format!("must be in (0, 90], got {half_angle_deg}"),
+                ));
+            }
+            Quantity::Luminance {
+                view_direction,
+                half_angle_deg,
+            }
+        }
+        other => {
+            return Err(Error::input(
+                format!("{at}.quantity"),
+                format!("unknown quantity `{other}` (expected \"illuminance\" or \"luminance\")"),
+            ))
+        }
+    };
+    let estimator = match r.estimator.as_deref().unwrap_or("auto") {
+        "track" => Estimator::Track,
+        "next_event" => Estimator::NextEvent,
+        "auto" => Estimator::Auto,
+        other => {
+            return Err(Error::input(
+                format!("{at}.estimator"),
+                format!(
+                    "unknown estimator `{other}` (expected \"track\", \"next_event\" or \"auto\")"
+                ),
+            ))
+        }
+    };
+    Ok(Receiver {
+        name: r.name,
+        corner,
+        u,
+        v,
+        cells: r.cells,
+        quantity,
+        estimator,
+    })
+}
+
+fn simulation(s: SimulationFile, at: &str) -> Result<Simulation> {
+    if s.photons == Some(0) {
+        return Err(Error::input(format!("{at}.photons"), "must be ≥ 1"));
+    }
+    let positive = |x: Option<f64>, key: &str| match x {
+        Some(v) if !(v > 0.0) => Err(Error::input(
+            format!("{at}.{key}"),
+            format!("must be > 0, got {v}"),
+        )),
+        _ => Ok(x),
+    };
+    Ok(Simulation {
+        photons: s.photons,
+        seed: s.seed.unwrap_or(1),
+        time_limit_s: positive(s.time_limit, "time_limit")?,
+        target_error: positive(s.target_error, "target_error")?,
+        target: s.target,
+        absolute: s.absolute,
+        min_hits: s.min_hits,
+    })
+}

@@ -1,0 +1,424 @@
+//! Mesh files: Wavefront OBJ (+ MTL) through `tobj`, glTF 2.0 (`.gltf`, `.glb`) through
+//! `gltf` without its `import` feature (we resolve buffers ourselves and never decode
+//! images). Both return world-space f64 triangles and the file's own materials, already
+//! reduced to a scalar reflectance.
+
+use super::shapes::Mesh;
+use crate::error::{Error, Result};
+use glam::{DMat4, DQuat, DVec3};
+use std::path::Path;
+
+/// RGB → scalar reflectance: luminance-weighted (Rec. 709 / sRGB Y), because luxtally
+/// tallies photometric quantities and the eye weighs green most.
+pub fn rgb_to_reflectance(rgb: [f64; 3]) -> f64 {
+    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
+}
+
+/// A material found in a mesh file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FileMaterial {
+    /// The material's name in the file, or its index when unnamed.
+    pub name: String,
+    pub reflectance: f64,
+}
+
+/// A loaded mesh file. `material[t]` indexes `materials`, or is `None` when the file gives
+/// triangle `t` no (usable) material; `missing_reason` then says why.
+#[derive(Clone, Debug, Default)]
+pub struct MeshFile {
+    pub mesh: Mesh,
+    pub material: Vec<Option<u32>>,
+    pub materials: Vec<FileMaterial>,
+    pub missing_reason: Option<String>,
+}
+
+/// Loads `path` by extension. `origin` prefixes messages (`scene.toml: objects[1].file`).
+pub fn load_mesh(path: &Path, origin: &str) -> Result<MeshFile> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default();
+    let bytes = std::fs::read(path).map_err(|e| {
+        Error::input(
+            origin,
+            format!("cannot read mesh file {}: {e}", path.display()),
+        )
+    })?;
+    let shown = path.display().to_string();
+    let fail =
+        |msg: String| Error::input(origin, format!("{shown}: {}", super::file::one_line(&msg)));
+    let out = match ext.as_str() {
+        "obj" => load_obj(&bytes, path).map_err(fail)?,
+        "gltf" | "glb" => load_gltf(&bytes, path).map_err(fail)?,
+        _ => {
+            return Err(Error::input(
+                origin,
+                format!("{shown}: unsupported mesh format (expected .obj, .gltf or .glb)"),
+            ))
+        }
+    };
+    Ok(out)
+}
+
+fn check_vertex(p: DVec3) -> std::result::Result<DVec3, String> {
+    if p.is_finite() {
+        Ok(p)
+    } else {
+        Err(format!("vertex {p} is not finite"))
+    }
+}
+
+fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> {
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ..Default::default()
+    };
+    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let mut reader = std::io::Cursor::new(bytes);
+    let (models, materials) =
+        tobj::load_obj_buf(&mut reader, &options, |mtl| tobj::load_mtl(dir.join(mtl)))
+            .map_err(|e| format!("malformed OBJ: {e}"))?;
+
+    let mut out = MeshFile::default();
+    // MTL problems only matter when no `material` override is given, so keep the reason.
+    let mtl_ok = match materials {
+        Ok(mats) => {
+            for (k, m) in mats.iter().enumerate() {
+                let name = if m.name.is_empty() {
+                    k.to_string()
+                } else {
+                    m.name.clone()
+                };
+                match m.diffuse {
+                    Some(kd) => out.materials.push(FileMaterial {
+                        name,
+                        reflectance: rgb_to_reflectance(kd.map(f64::from)),
+                    }),
+                    // No Kd: keep the slot (indices must stay aligned) but mark it unusable.
+                    None => out.materials.push(FileMaterial {
+                        name,
+                        reflectance: f64::NAN,
+                    }),
+                }
+            }
+            true
+        }
+        Err(e) => {
+            out.missing_reason = Some(format!("its MTL file could not be loaded ({e})"));
+            false
+        }
+    };
+
+    for model in &models {
+        let m = &model.mesh;
+        if m.positions.len() % 3 != 0 || m.indices.len() % 3 != 0 {
+            return Err(format!(
+                "malformed OBJ: model `{}` is incomplete",
+                model.name
+            ));
+        }
+        let base = out.mesh.vertices.len();
+        let count = m.positions.len() / 3;
+        for p in m.positions.chunks_exact(3) {
+            let v = DVec3::new(p[0].into(), p[1].into(), p[2].into());
+            out.mesh.vertices.push(check_vertex(v)?);
+        }
+        let material = match m.material_id {
+            Some(id) if mtl_ok => match out.materials.get(id) {
+                Some(fm) if fm.reflectance.is_nan() => {
+                    out.missing_reason = Some(format!("material `{}` has no Kd", fm.name));
+                    None
+                }
+                Some(_) => Some(id as u32),
+                None => {
+                    out.missing_reason = Some(format!("material index {id} is not in its MTL"));
+                    None
+                }
+            },
+            Some(_) => None,
+            None => {
+                out.missing_reason = Some(format!("object `{}` has no material", model.name));
+                None
+            }
+        };
+        for t in m.indices.chunks_exact(3) {
+            let mut tri = [0u32; 3];
+            for (slot, &i) in tri.iter_mut().zip(t) {
+                if i as usize >= count {
+                    return Err(format!(
+                        "malformed OBJ: face index {} out of range in `{}`",
+                        i + 1,
+                        model.name
+                    ));
+                }
+                *slot = u32::try_from(base + i as usize)
+                    .map_err(|_| "too many vertices".to_string())?;
+            }
+            out.mesh.triangles.push(tri);
+            out.material.push(material);
+        }
+    }
+    Ok(out)
+}
+
+/// Reads a glTF buffer's bytes: the GLB chunk, a base64 `data:` URI, or a file next to
+/// the glTF file.
+fn buffer_data(
+    buffer: &gltf::Buffer,
+    blob: Option<&[u8]>,
+    dir: &Path,
+) -> std::result::Result<Vec<u8>, String> {
+    let data = match buffer.source() {
+        gltf::buffer::Source::Bin => blob
+            .ok_or_else(|| format!("buffer {} refers to a missing GLB chunk", buffer.index()))?
+            .to_vec(),
+        gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
+            use base64::Engine;
+            let (_, payload) = uri.split_once(";base64,").ok_or_else(|| {
+                format!(
+                    "buffer {}: only base64 data URIs are supported",
+                    buffer.index()
+                )
+            })?;
+            base64::engine::general_purpose::STANDARD
+                .decode(payload)
+                .map_err(|e| format!("buffer {}: bad base64 ({e})", buffer.index()))?
+        }
+        gltf::buffer::Source::Uri(uri) => {
+            let file = dir.join(uri);
+            std::fs::read(&file)
+                .map_err(|e| format!("buffer {}: {}: {e}", buffer.index(), file.display()))?
+        }
+    };
+    if data.len() < buffer.length() {
+        return Err(format!(
+            "buffer {} holds {} bytes, fewer than its byteLength {}",
+            buffer.index(),
+            data.len(),
+            buffer.length()
+        ));
+    }
+    Ok(data)
+}
+
+/// Checks what `gltf`'s reader assumes (and would otherwise debug-assert or overflow on):
+/// the accessor's shape, a non-empty dense view, and a count its view can hold.
+fn check_accessor(
+    accessor: &gltf::Accessor,
+    what: &str,
+    dims: gltf::accessor::Dimensions,
+    types: &[gltf::accessor::DataType],
+) -> std::result::Result<(), String> {
+    let id = accessor.index();
+    if accessor.dimensions() != dims || !types.contains(&accessor.data_type()) {
+        return Err(format!(
+            "accessor {id} ({what}) has type {:?} {:?}",
+            accessor.dimensions(),
+            accessor.data_type()
+        ));
+    }
+    if accessor.sparse().is_some() {
+        return Err(format!(
+            "accessor {id} ({what}): sparse accessors are not supported"
+        ));
+    }
+    let view = accessor
+        .view()
+        .ok_or_else(|| format!("accessor {id} ({what}) has no buffer view"))?;
+    if let Some(stride) = view.stride() {
+        if stride < accessor.size() {
+            return Err(format!("accessor {id} ({what}): stride {stride} too small"));
+        }
+    }
+    if accessor.count() == 0 || accessor.count() > view.length() {
+        return Err(format!(
+            "accessor {id} ({what}): bad count {}",
+            accessor.count()
+        ));
+    }
+    Ok(())
+}
+
+/// A node's local transform in f64 (TRS composed as T·R·S, as glTF specifies).
+fn node_matrix(node: &gltf::Node) -> DMat4 {
+    match node.transform() {
+        gltf::scene::Transform::Matrix { matrix } => {
+            DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)))
+        }
+        gltf::scene::Transform::Decomposed {
+            translation,
+            rotation,
+            scale,
+        } => {
+            let q = DQuat::from_array(rotation.map(f64::from));
+            // Unnormalised quaternions occur in the wild; a zero one means no rotation.
+            let q = if q.length_squared() > 0.0 {
+                q.normalize()
+            } else {
+                DQuat::IDENTITY
+            };
+            DMat4::from_scale_rotation_translation(
+                DVec3::from_array(scale.map(f64::from)),
+                q,
+                DVec3::from_array(translation.map(f64::from)),
+            )
+        }
+    }
+}
+
+struct GltfWalk<'a> {
+    buffers: Vec<Vec<u8>>,
+    out: MeshFile,
+    /// glTF material index → index in `out.materials`.
+    material_slot: Vec<Option<u32>>,
+    /// Nodes on the current path from the root, to reject cycles.
+    stack: Vec<usize>,
+    doc: &'a gltf::Document,
+}
+
+fn load_gltf(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> {
+    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| format!("malformed glTF: {e}"))?;
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let buffers = gltf
+        .buffers()
+        .map(|b| buffer_data(&b, gltf.blob.as_deref(), dir))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
+    let scene = gltf
+        .default_scene()
+        .or_else(|| gltf.scenes().next())
+        .ok_or("the glTF file has no scene")?;
+    let mut walk = GltfWalk {
+        buffers,
+        out: MeshFile::default(),
+        material_slot: vec![None; gltf.materials().len()],
+        stack: Vec::new(),
+        doc: &gltf.document,
+    };
+    for node in scene.nodes() {
+        walk.node(&node, DMat4::IDENTITY)?;
+    }
+    Ok(walk.out)
+}
+
+impl GltfWalk<'_> {
+    fn node(&mut self, node: &gltf::Node, parent: DMat4) -> std::result::Result<(), String> {
+        if self.stack.contains(&node.index()) {
+            return Err(format!("node {} is its own ancestor", node.index()));
+        }
+        let world = parent * node_matrix(node);
+        if !world.is_finite() {
+            return Err(format!("node {}: transform is not finite", node.index()));
+        }
+        self.stack.push(node.index());
+        if let Some(mesh) = node.mesh() {
+            for primitive in mesh.primitives() {
+                self.primitive(&primitive, &world)?;
+            }
+        }
+        for child in node.children() {
+            self.node(&child, world)?;
+        }
+        self.stack.pop();
+        Ok(())
+    }
+
+    fn primitive(
+        &mut self,
+        primitive: &gltf::Primitive,
+        world: &DMat4,
+    ) -> std::result::Result<(), String> {
+        use gltf::accessor::{DataType, Dimensions};
+        // Lines and points have no area: skip them.
+        if primitive.mode() != gltf::mesh::Mode::Triangles {
+            return Ok(());
+        }
+        let positions = primitive
+            .get(&gltf::Semantic::Positions)
+            .ok_or("a triangle primitive has no POSITION")?;
+        check_accessor(&positions, "POSITION", Dimensions::Vec3, &[DataType::F32])?;
+        if let Some(indices) = primitive.indices() {
+            check_accessor(
+                &indices,
+                "indices",
+                Dimensions::Scalar,
+                &[DataType::U8, DataType::U16, DataType::U32],
+            )?;
+        }
+        let buffers = &self.buffers;
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| d.as_slice()));
+        let local: Vec<[f32; 3]> = reader
+            .read_positions()
+            .ok_or_else(|| format!("accessor {}: data outside its buffer", positions.index()))?
+            .collect();
+        let indices: Vec<u32> = match primitive.indices() {
+            Some(acc) => reader
+                .read_indices()
+                .ok_or_else(|| format!("accessor {}: data outside its buffer", acc.index()))?
+                .into_u32()
+                .collect(),
+            None => (0..local.len() as u32).collect(),
+        };
+        if indices.len() % 3 != 0 {
+            return Err(format!(
+                "{} indices is not a whole number of triangles",
+                indices.len()
+            ));
+        }
+        // A mirroring transform reverses the winding (glTF spec, "Transformations").
+        let mirrored = world.determinant() < 0.0;
+        let base = self.out.mesh.vertices.len();
+        for p in &local {
+            let p = world.transform_point3(DVec3::from_array(p.map(f64::from)));
+            self.out.mesh.vertices.push(check_vertex(p)?);
+        }
+        let material = self.material(primitive)?;
+        for t in indices.chunks_exact(3) {
+            let mut tri = [0u32; 3];
+            for (slot, &i) in tri.iter_mut().zip(t) {
+                if i as usize >= local.len() {
+                    return Err(format!("index {i} out of range ({} vertices)", local.len()));
+                }
+                *slot = u32::try_from(base + i as usize).map_err(|_| "too many vertices")?;
+            }
+            if mirrored {
+                tri.swap(1, 2);
+            }
+            self.out.mesh.triangles.push(tri);
+            self.out.material.push(material);
+        }
+        Ok(())
+    }
+
+    /// The primitive's material as a slot in `out.materials`, created on first use.
+    fn material(
+        &mut self,
+        primitive: &gltf::Primitive,
+    ) -> std::result::Result<Option<u32>, String> {
+        let Some(index) = primitive.material().index() else {
+            self.out.missing_reason = Some("a primitive has no material".to_string());
+            return Ok(None);
+        };
+        let slot = self
+            .material_slot
+            .get_mut(index)
+            .ok_or_else(|| format!("material {index} does not exist"))?;
+        if let Some(s) = slot {
+            return Ok(Some(*s));
+        }
+        let m = self
+            .doc
+            .materials()
+            .nth(index)
+            .ok_or_else(|| format!("material {index} does not exist"))?;
+        let [r, g, b, _alpha] = m.pbr_metallic_roughness().base_color_factor();
+        self.out.materials.push(FileMaterial {
+            name: m.name().map_or_else(|| index.to_string(), str::to_string),
+            reflectance: rgb_to_reflectance([r, g, b].map(f64::from)),
+        });
+        let s = (self.out.materials.len() - 1) as u32;
+        *slot = Some(s);
+        Ok(Some(s))
+    }
+}

@@ -1,0 +1,308 @@
+//! Bad scene input: every case is an error (never a panic) whose message is one line that
+//! names the file and the key at fault.
+
+use luxtally::scene;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+static COUNTER: AtomicUsize = AtomicUsize::new(0);
+
+/// A unique path under the temp directory (tests run in parallel).
+fn temp_path(name: &str) -> PathBuf {
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    std::env::temp_dir().join(format!("luxtally-bad-{}-{n}-{name}", std::process::id()))
+}
+
+fn write(name: &str, contents: &[u8]) -> PathBuf {
+    let path = temp_path(name);
+    std::fs::write(&path, contents).unwrap();
+    path
+}
+
+/// Loads `text` as a scene file and returns its error message, checked to be one line
+/// naming the file.
+fn error_of(text: &str) -> String {
+    let path = write("scene.toml", text.as_bytes());
+    let result = scene::load(&path);
+    let _ = std::fs::remove_file(&path);
+    let message = match result {
+        Ok(_) => panic!("scene loaded but should not have:\n{text}"),
+        Err(e) => e.to_string(),
+    };
+    eprintln!("{message}");
+    assert!(!message.contains('\n'), "not one line: {message:?}");
+    assert!(
+        message.contains(&path.display().to_string()),
+        "does not name the file: {message}"
+    );
+    message
+}
+
+fn assert_has(message: &str, parts: &[&str]) {
+    for p in parts {
+        assert!(message.contains(p), "`{p}` missing from: {message}");
+    }
+}
+
+const GREY: &str = "[materials.grey]\nreflectance = 0.5\n";
+const RECEIVER: &str = "[[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\ncells = [2, 2]\n";
+
+#[test]
+fn missing_scene_file_names_the_path() {
+    let path = temp_path("does-not-exist.toml");
+    let message = match scene::load(&path) {
+        Ok(_) => panic!("loaded a missing file"),
+        Err(e) => e.to_string(),
+    };
+    assert!(!message.contains('\n'));
+    assert_has(&message, &[&path.display().to_string()]);
+}
+
+#[test]
+fn missing_mesh_file_names_the_mesh_and_the_key() {
+    let m = error_of(&format!(
+        "{GREY}[[objects]]\nfile = \"no-such-mesh.obj\"\nmaterial = \"grey\"\n"
+    ));
+    assert_has(&m, &["objects[0].file", "no-such-mesh.obj"]);
+}
+
+#[test]
+fn malformed_toml_names_line_and_column() {
+    let m = error_of("name = \"x\"\n[[objects]\nshape = \"box\"\n");
+    assert_has(&m, &["line 2, column"]);
+}
+
+#[test]
+fn malformed_obj_names_the_mesh_and_tobj_reason() {
+    let obj = write("bad.obj", b"v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n");
+    let m = error_of(&format!(
+        "{GREY}[[objects]]\nfile = \"{}\"\nmaterial = \"grey\"\n",
+        obj.display()
+    ));
+    let _ = std::fs::remove_file(&obj);
+    assert_has(&m, &["objects[0].file", "bad.obj", "malformed OBJ"]);
+}
+
+#[test]
+fn obj_face_index_out_of_range_is_an_error() {
+    let obj = write("range.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+    let m = error_of(&format!(
+        "{GREY}[[objects]]\nfile = \"{}\"\nmaterial = \"grey\"\n",
+        obj.display()
+    ));
+    let _ = std::fs::remove_file(&obj);
+    assert_has(&m, &["objects[0].file", "range.obj"]);
+}
+
+#[test]
+fn obj_without_material_asks_for_an_override() {
+    let obj = write("plain.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    let m = error_of(&format!("[[objects]]\nfile = \"{}\"\n", obj.display()));
+    let _ = std::fs::remove_file(&obj);
+    assert_has(&m, &["objects[0].material", "set `material"]);
+}
+
+#[test]
+fn malformed_gltf_names_the_mesh() {
+    let gltf = write("bad.gltf", b"{ \"asset\": { \"version\": ");
+    let m = error_of(&format!(
+        "{GREY}[[objects]]\nfile = \"{}\"\nmaterial = \"grey\"\n",
+        gltf.display()
+    ));
+    let _ = std::fs::remove_file(&gltf);
+    assert_has(&m, &["objects[0].file", "bad.gltf", "malformed glTF"]);
+}
+
+#[test]
+fn gltf_with_out_of_range_data_is_an_error_not_a_panic() {
+    // The accessor claims 30 vertices but the buffer holds 36 bytes; indices point past
+    // the end; a node is its own child.
+    let cases = [
+        r#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+           "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+           "buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+           "bufferViews":[{"buffer":0,"byteLength":36}],
+           "accessors":[{"bufferView":0,"componentType":5126,"count":30,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}]}"#,
+        r#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+           "meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],
+           "buffers":[{"byteLength":40,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAEJAA=="}],
+           "bufferViews":[{"buffer":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":4}],
+           "accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},
+                        {"bufferView":1,"componentType":5121,"count":3,"type":"SCALAR"}]}"#,
+        r#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"children":[0]}]}"#,
+        r#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":100,"uri":"data:application/octet-stream;base64,AAAA"}]}"#,
+    ];
+    for (k, json) in cases.iter().enumerate() {
+        let gltf = write(&format!("broken{k}.gltf"), json.as_bytes());
+        let m = error_of(&format!(
+            "{GREY}[[objects]]\nfile = \"{}\"\nmaterial = \"grey\"\n",
+            gltf.display()
+        ));
+        let _ = std::fs::remove_file(&gltf);
+        assert_has(&m, &["objects[0].file", &format!("broken{k}.gltf")]);
+    }
+}
+
+#[test]
+fn nan_is_rejected_with_its_key_path() {
+    let m = error_of("[[lights]]\ntype = \"point\"\nposition = [3, nan, 2.8]\nintensity_cd = 1\n");
+    assert_has(&m, &["lights[0].position: value is not finite"]);
+}
+
+#[test]
+fn infinity_is_rejected_with_its_key_path() {
+    let m = error_of("[materials.wall]\nreflectance = inf\n");
+    assert_has(&m, &["materials.wall.reflectance: value is not finite"]);
+}
+
+#[test]
+fn unknown_key_is_named() {
+    let m = error_of(&format!(
+        "{GREY}[[objects]]\nshape = \"box\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nmaterial = \"grey\"\ncolour = \"red\"\n"
+    ));
+    assert_has(&m, &["objects[0]", "unknown field `colour`"]);
+    let m = error_of("[simulation]\nphotns = 10\n");
+    assert_has(&m, &["simulation", "unknown field `photns`"]);
+    let m = error_of("nmae = \"x\"\n");
+    assert_has(&m, &["unknown field `nmae`"]);
+}
+
+#[test]
+fn wrong_type_names_the_field() {
+    let m = error_of(&format!(
+        "{GREY}[[objects]]\nshape = \"sphere\"\ncenter = [0, 0, 0]\nradius = \"big\"\nmaterial = \"grey\"\n"
+    ));
+    assert_has(&m, &["objects[0].radius"]);
+}
+
+#[test]
+fn unknown_material_is_named() {
+    let m = error_of(&format!(
+        "{GREY}[[objects]]\nshape = \"box\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nmaterial = \"grey\"\n[[objects]]\nshape = \"rect\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\nmaterial = \"glass\"\n"
+    ));
+    assert_has(&m, &["objects[1].material", "unknown material `glass`"]);
+}
+
+#[test]
+fn energy_creating_material_is_rejected() {
+    let m = error_of("[materials.bright]\nreflectance = 0.8\nspecular_reflectance = 0.4\n");
+    assert_has(
+        &m,
+        &[
+            "materials.bright",
+            "energy-creating material",
+            "= 1.2",
+            "> 1",
+        ],
+    );
+    let m = error_of("[materials.neg]\nreflectance = -0.1\n");
+    assert_has(&m, &["materials.neg.reflectance"]);
+    let m = error_of("[materials.glass]\nspecular_transmittance = 0.9\nior = 0.9\n");
+    assert_has(&m, &["materials.glass.ior"]);
+}
+
+#[test]
+fn zero_area_receiver_is_rejected() {
+    let m = error_of(
+        "[[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [2, 0, 0]\ncells = [2, 2]\n",
+    );
+    assert_has(&m, &["receivers[0]", "zero-area receiver"]);
+}
+
+#[test]
+fn zero_cells_are_rejected() {
+    let m = error_of(
+        "[[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\ncells = [0, 4]\n",
+    );
+    assert_has(&m, &["receivers[0].cells", "zero cells"]);
+}
+
+#[test]
+fn bad_light_parameters_are_rejected() {
+    let cases: &[(&str, &[&str])] = &[
+        ("type = \"point\"\nposition = [0, 0, 0]\nflux_lm = -5\n", &["lights[0].flux_lm"]),
+        ("type = \"point\"\nposition = [0, 0, 0]\nintensity_cd = 1\nflux_lm = 5\n", &["lights[0]", "exactly one"]),
+        ("type = \"point\"\nposition = [0, 0, 0]\n", &["lights[0]", "exactly one"]),
+        ("type = \"point\"\nintensity_cd = 1\n", &["lights[0].position", "missing"]),
+        ("type = \"spot\"\nposition = [0, 0, 0]\ndirection = [0, 0, 0]\nintensity_cd = 1\ncone_deg = 30\n", &["lights[0].direction", "zero direction"]),
+        ("type = \"spot\"\nposition = [0, 0, 0]\ndirection = [0, 0, -1]\nintensity_cd = 1\ncone_deg = 200\n", &["lights[0].cone_deg"]),
+        ("type = \"spot\"\nposition = [0, 0, 0]\ndirection = [0, 0, -1]\nintensity_cd = 1\ncone_deg = 30\nfalloff_deg = 40\n", &["lights[0].falloff_deg"]),
+        ("type = \"directional\"\ndirection = [0, 0, -1]\nilluminance_lx = -1\n", &["lights[0].illuminance_lx"]),
+        ("type = \"area\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [1, 0, 0]\nflux_lm = 10\n", &["lights[0]", "zero-area light"]),
+        ("type = \"area\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\nflux_lm = 10\nposition = [0, 0, 0]\n", &["lights[0].position", "does not apply"]),
+        ("type = \"laser\"\n", &["lights[0].type", "unknown light type"]),
+    ];
+    for (light, parts) in cases {
+        let m = error_of(&format!("[[lights]]\n{light}"));
+        assert_has(&m, parts);
+    }
+}
+
+#[test]
+fn duplicate_receiver_name_is_rejected() {
+    let m = error_of(&format!("{RECEIVER}{RECEIVER}"));
+    assert_has(&m, &["receivers[1].name", "duplicate receiver name `r`"]);
+}
+
+#[test]
+fn bad_shape_parameters_are_rejected() {
+    let cases: &[(&str, &[&str])] = &[
+        (
+            "shape = \"box\"\nmin = [0, 0, 0]\nmax = [1, 0, 1]\n",
+            &["objects[0].max"],
+        ),
+        (
+            "shape = \"box\"\nmin = [0, 0, 0]\n",
+            &["objects[0].max", "missing"],
+        ),
+        (
+            "shape = \"rect\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [2, 0, 0]\n",
+            &["objects[0]", "zero-area rect"],
+        ),
+        (
+            "shape = \"sphere\"\ncenter = [0, 0, 0]\nradius = 0\n",
+            &["objects[0].radius"],
+        ),
+        (
+            "shape = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nsubdivisions = 9\n",
+            &["objects[0].subdivisions"],
+        ),
+        (
+            "shape = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmin = [0, 0, 0]\n",
+            &["objects[0].min", "does not apply"],
+        ),
+        ("shape = \"cone\"\n", &["objects[0].shape", "unknown shape"]),
+        (
+            "shape = \"box\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nscale = -1\n",
+            &["objects[0].scale"],
+        ),
+    ];
+    for (object, parts) in cases {
+        let m = error_of(&format!("{GREY}[[objects]]\n{object}material = \"grey\"\n"));
+        assert_has(&m, parts);
+    }
+    let m = error_of("[[objects]]\nshape = \"box\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n");
+    assert_has(&m, &["objects[0].material", "missing"]);
+}
+
+#[test]
+fn bad_receiver_and_simulation_parameters_are_rejected() {
+    let m = error_of(&format!(
+        "{RECEIVER}quantity = \"luminance\"\nview_direction = [0, 0, -1]\nhalf_angle_deg = 95\n"
+    ));
+    assert_has(&m, &["receivers[0].half_angle_deg"]);
+    let m = error_of(&format!(
+        "{RECEIVER}quantity = \"luminance\"\nhalf_angle_deg = 5\n"
+    ));
+    assert_has(&m, &["receivers[0].view_direction", "missing"]);
+    let m = error_of(&format!("{RECEIVER}estimator = \"magic\"\n"));
+    assert_has(&m, &["receivers[0].estimator"]);
+    let m = error_of("[[receivers]]\nname = \"\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\ncells = [2, 2]\n");
+    assert_has(&m, &["receivers[0].name", "empty"]);
+    let m = error_of("[simulation]\nphotons = 0\n");
+    assert_has(&m, &["simulation.photons"]);
+    let m = error_of("[simulation]\nphotons = -3\n");
+    assert_has(&m, &["simulation.photons"]);
+    let m = error_of("[simulation]\ntime_limit = 0\n");
+    assert_has(&m, &["simulation.time_limit"]);
+}
