@@ -9,12 +9,12 @@
 pub mod accel;
 pub mod bench;
 pub mod error;
+pub mod output;
 pub mod rng;
+pub mod run;
 pub mod scene;
-
-pub use error::{Error, Result};
+pub mod stats;
 pub mod tally;
 pub mod trace;
-pub mod stats;
-pub mod run;
-pub mod output;
+
+pub use error::{Error, Result};

@@ -253,8 +253,3 @@ impl Geometry {
         g
     }
 }
-
-/// Placeholder until the loader lands.
-pub fn load(path: &std::path::Path) -> crate::Result<Scene> {
-    Err(crate::Error::input(path.display().to_string(), "scene loading not yet available"))
-}

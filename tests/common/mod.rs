@@ -1,0 +1,110 @@
+//! Shared by the integration tests: run a scene given as TOML text, exact reference
+//! formulas, and z-score statistics.
+#![allow(dead_code)]
+
+use luxtally::accel::Backend;
+use luxtally::output::summary::{self, ReceiverSummary, Summary};
+use luxtally::run::{run, RunOptions};
+use luxtally::scene::{load_str, Scene};
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+
+pub fn scene(toml: &str) -> Scene {
+    load_str(toml, Path::new("."), "test.toml").expect("test scene loads")
+}
+
+pub fn options(scene: &Scene, photons: u64, threads: usize, backend: Backend) -> RunOptions {
+    RunOptions {
+        photons: Some(photons),
+        threads,
+        backend,
+        ..RunOptions::from_scene(scene)
+    }
+}
+
+/// Runs `options` on `scene` and returns its summary.
+pub fn run_options(scene: &Scene, options: &RunOptions) -> Summary {
+    let result = run(scene, options, &AtomicBool::new(false), &mut ()).expect("run succeeds");
+    summary::build(&result.state(scene, options))
+}
+
+/// Runs `photons` photons through the scene on 2 threads with Embree.
+pub fn run_scene(toml: &str, photons: u64) -> Summary {
+    let s = scene(toml);
+    run_options(&s, &options(&s, photons, 2, Backend::Embree))
+}
+
+/// z-scores (value − exact) / σ of every cell, from `exact(i, j)`.
+pub fn z_scores(r: &ReceiverSummary, exact: impl Fn(usize, usize) -> f64) -> Vec<f64> {
+    let nu = r.cells[0] as usize;
+    r.values
+        .iter()
+        .zip(&r.sigma)
+        .enumerate()
+        .map(|(k, (v, s))| {
+            assert!(*s > 0.0, "cell {k} has no error estimate (value {v})");
+            (v - exact(k % nu, k / nu)) / s
+        })
+        .collect()
+}
+
+pub fn rms(z: &[f64]) -> f64 {
+    (z.iter().map(|x| x * x).sum::<f64>() / z.len() as f64).sqrt()
+}
+
+/// The z-scores of a calibrated estimate: RMS within [0.85, 1.2] (the bound; for
+/// K ≥ 200 cells the RMS of unit normals is 1 ± 0.05) and no cell beyond 5σ.
+pub fn assert_calibrated(z: &[f64], what: &str) {
+    let r = rms(z);
+    let worst = z.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    eprintln!("{what}: z RMS {r:.3}, worst {worst:.2} over {} cells", z.len());
+    assert!((0.85..=1.2).contains(&r), "{what}: z-score RMS {r:.3} over {} cells", z.len());
+    assert!(worst < 5.0, "{what}: a cell is {worst:.1}σ off");
+}
+
+/// ∫∫ h / (h² + x² + y²)^{3/2} dx dy over [0, x] × [0, y]: the solid angle of that
+/// rectangle seen from height h above its corner.
+pub fn corner_solid_angle(x: f64, y: f64, h: f64) -> f64 {
+    (x * y / (h * (h * h + x * x + y * y).sqrt())).atan()
+}
+
+/// Exact mean illuminance over the rectangle [x0, x1] × [y0, y1] of a plane at distance h
+/// from an isotropic point source of `intensity_cd` above the plane's origin.
+pub fn point_source_cell_lx(intensity_cd: f64, h: f64, x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
+    let f = |x: f64, y: f64| corner_solid_angle(x, y, h);
+    let omega = f(x1, y1) - f(x0, y1) - f(x1, y0) + f(x0, y0);
+    intensity_cd * omega / ((x1 - x0) * (y1 - y0))
+}
+
+/// Configuration factor from a point to a parallel a × b rectangle at distance h, one
+/// of whose corners is straight above the point (signed a, b allowed).
+pub fn parallel_corner_factor(a: f64, b: f64, h: f64) -> f64 {
+    let (a, b) = (a / h, b / h);
+    let (ra, rb) = ((1.0 + a * a).sqrt(), (1.0 + b * b).sqrt());
+    (a / ra * (b / ra).atan() + b / rb * (a / rb).atan()) / (2.0 * std::f64::consts::PI)
+}
+
+/// Gauss–Legendre nodes and weights on [0, 1], 8 points: exact for the smooth integrands
+/// here to far below any σ.
+pub fn gauss8() -> [(f64, f64); 8] {
+    const X: [f64; 4] = [0.183_434_642_495_649_8, 0.525_532_409_916_329_0, 0.796_666_477_413_626_7, 0.960_289_856_497_536_3];
+    const W: [f64; 4] = [0.362_683_783_378_362_0, 0.313_706_645_877_887_3, 0.222_381_034_453_374_5, 0.101_228_536_290_376_3];
+    let mut out = [(0.0, 0.0); 8];
+    for k in 0..4 {
+        out[2 * k] = (0.5 - 0.5 * X[k], 0.5 * W[k]);
+        out[2 * k + 1] = (0.5 + 0.5 * X[k], 0.5 * W[k]);
+    }
+    out
+}
+
+/// Mean of f over [x0, x1] × [y0, y1] by 8 × 8 Gauss–Legendre.
+pub fn cell_average(f: impl Fn(f64, f64) -> f64, x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
+    let g = gauss8();
+    let mut sum = 0.0;
+    for (sx, wx) in g {
+        for (sy, wy) in g {
+            sum += wx * wy * f(x0 + sx * (x1 - x0), y0 + sy * (y1 - y0));
+        }
+    }
+    sum
+}

@@ -1,0 +1,269 @@
+//! The photon pass against analytic truth. Every tolerance comes from the σ the run
+//! reports: per-cell z-scores must be calibrated (RMS within [0.85, 1.2]).
+
+mod common;
+
+use common::*;
+use std::f64::consts::PI;
+
+#[test]
+fn point_source_over_black_plane_matches_inverse_square_cosine_law() {
+    let s = run_scene(
+        r#"
+        [materials.black]
+        reflectance = 0.0
+        [[objects]]
+        shape = "rect"
+        corner = [-10, -10, 0]
+        u = [20, 0, 0]
+        v = [0, 20, 0]
+        material = "black"
+        [[lights]]
+        type = "point"
+        position = [0.3, -0.2, 2.0]
+        intensity_cd = 1000
+        [[receivers]]
+        name = "r"
+        corner = [-1, -1, 0.0001]
+        u = [2, 0, 0]
+        v = [0, 2, 0]
+        cells = [16, 16]
+        "#,
+        4_000_000,
+    );
+    let r = &s.receivers["r"];
+    let h = 2.0 - 0.0001;
+    let z = z_scores(r, |i, j| {
+        let (x0, y0) = (-1.0 + i as f64 * 0.125 - 0.3, -1.0 + j as f64 * 0.125 + 0.2);
+        point_source_cell_lx(1000.0, h, x0, x0 + 0.125, y0, y0 + 0.125)
+    });
+    assert_calibrated(&z, "point source over plane");
+}
+
+#[test]
+fn lambertian_square_emitter_matches_view_factor() {
+    // A 1 m² Lambertian square 1 m above the receiver plane, emitting downwards (u × v = −z).
+    let (flux, h) = (1000.0, 1.0);
+    let s = run_scene(
+        r#"
+        [[lights]]
+        type = "area"
+        corner = [-0.5, 0.5, 1.0]
+        u = [1, 0, 0]
+        v = [0, -1, 0]
+        flux_lm = 1000
+        [[receivers]]
+        name = "r"
+        corner = [-1, -1, 0]
+        u = [2, 0, 0]
+        v = [0, 2, 0]
+        cells = [16, 16]
+        "#,
+        4_000_000,
+    );
+    let luminance = flux / PI;
+    let point_lx = |x: f64, y: f64| {
+        let f = |a: f64, b: f64| parallel_corner_factor(a, b, h);
+        let (x0, x1, y0, y1) = (-0.5 - x, 0.5 - x, -0.5 - y, 0.5 - y);
+        PI * luminance * (f(x1, y1) - f(x0, y1) - f(x1, y0) + f(x0, y0))
+    };
+    // The formula itself: straight below the centre of a square of side 2a at height h.
+    let centre = point_lx(0.0, 0.0);
+    let a: f64 = 0.5;
+    let exact_centre = 2.0 * luminance * (a / (a * a + h * h).sqrt()) * 2.0 * (a / (a * a + h * h).sqrt()).atan();
+    assert!((centre - exact_centre).abs() < 1e-9 * exact_centre, "{centre} vs {exact_centre}");
+    let z = z_scores(&s.receivers["r"], |i, j| {
+        let (x0, y0) = (-1.0 + i as f64 * 0.125, -1.0 + j as f64 * 0.125);
+        cell_average(point_lx, x0, x0 + 0.125, y0, y0 + 0.125)
+    });
+    assert_calibrated(&z, "area source over plane");
+}
+
+fn closed_box(rho: f64) -> String {
+    format!(
+        r#"
+        [materials.wall]
+        reflectance = {rho}
+        [[objects]]
+        shape = "box"
+        min = [0, 0, 0]
+        max = [4, 3, 2.5]
+        material = "wall"
+        [[lights]]
+        type = "point"
+        position = [1.3, 1.1, 1.7]
+        intensity_cd = 100
+        "#
+    )
+}
+
+fn assert_closed_box_balance(rho: f64, photons: u64) {
+    let s = run_scene(&closed_box(rho), photons);
+    let area = 2.0 * (4.0 * 3.0 + 3.0 * 2.5 + 4.0 * 2.5);
+    assert!((s.global.area_m2 - area).abs() < 1e-9);
+    let exact = 4.0 * PI * 100.0 / ((1.0 - rho) * area);
+    let g = &s.global;
+    assert!(g.mean_sigma_lx > 0.0);
+    assert!(
+        (g.mean_illuminance_lx - exact).abs() < 3.0 * g.mean_sigma_lx,
+        "ρ = {rho}: mean {} vs {exact} (σ {})",
+        g.mean_illuminance_lx,
+        g.mean_sigma_lx
+    );
+    assert_eq!(s.photons_killed_by_bounce_cap, 0);
+}
+
+#[test]
+fn closed_box_energy_balance_rho_half() {
+    assert_closed_box_balance(0.5, 1_000_000);
+}
+
+#[test]
+fn closed_box_energy_balance_rho_095() {
+    assert_closed_box_balance(0.95, 500_000);
+}
+
+#[test]
+fn integrating_sphere_receiver_reads_direct_plus_uniform_indirect() {
+    let (rho, intensity) = (0.8, 100.0);
+    let s = run_scene(
+        r#"
+        [materials.coating]
+        reflectance = 0.8
+        [[objects]]
+        shape = "sphere"
+        center = [0, 0, 0]
+        radius = 1.0
+        subdivisions = 4
+        material = "coating"
+        [[lights]]
+        type = "point"
+        position = [0, 0, 0]
+        intensity_cd = 100
+        [[receivers]]
+        name = "r"
+        corner = [-0.2, 0.2, 0.3]
+        u = [0.4, 0, 0]
+        v = [0, -0.4, 0]
+        cells = [8, 8]
+        "#,
+        2_000_000,
+    );
+    let flux = 4.0 * PI * intensity;
+    let indirect = rho * flux / ((1.0 - rho) * s.global.area_m2);
+    let w = 0.4 / 8.0;
+    let z = z_scores(&s.receivers["r"], |i, j| {
+        let x0 = -0.2 + i as f64 * w;
+        let y1 = 0.2 - j as f64 * w;
+        point_source_cell_lx(intensity, 0.3, x0, x0 + w, y1 - w, y1) + indirect
+    });
+    assert_calibrated(&z, "integrating sphere");
+}
+
+#[test]
+fn luminance_receiver_over_lambertian_floor_reads_rho_e_over_pi() {
+    let (rho, intensity, h) = (0.6, 1000.0, 2.0);
+    let s = run_scene(
+        r#"
+        [materials.floor]
+        reflectance = 0.6
+        [[objects]]
+        shape = "rect"
+        corner = [-20, -20, 0]
+        u = [40, 0, 0]
+        v = [0, 40, 0]
+        material = "floor"
+        [[lights]]
+        type = "point"
+        position = [0, 0, 2]
+        intensity_cd = 1000
+        [[receivers]]
+        name = "meter"
+        corner = [-0.5, -0.5, 0.0001]
+        u = [1, 0, 0]
+        v = [0, 1, 0]
+        cells = [8, 8]
+        quantity = "luminance"
+        view_direction = [0, 0, -1]
+        half_angle_deg = 30
+        "#,
+        6_000_000,
+    );
+    let r = &s.receivers["meter"];
+    assert_eq!(r.unit, "cd/m2");
+    let z = z_scores(r, |i, j| {
+        let (x0, y0) = (-0.5 + i as f64 * 0.125, -0.5 + j as f64 * 0.125);
+        rho / PI * point_source_cell_lx(intensity, h, x0, x0 + 0.125, y0, y0 + 0.125)
+    });
+    assert_calibrated(&z, "luminance over floor");
+}
+
+#[test]
+fn mirror_adds_the_image_of_the_source() {
+    // Source 0.5 m above a perfect mirror; a downward-facing receiver 1 m above the source
+    // sees the source (1 m away) and its image (2 m away).
+    let s = run_scene(
+        r#"
+        [materials.mirror]
+        reflectance = 0.0
+        specular_reflectance = 1.0
+        [[objects]]
+        shape = "rect"
+        corner = [-10, -10, 0]
+        u = [20, 0, 0]
+        v = [0, 20, 0]
+        material = "mirror"
+        [[lights]]
+        type = "point"
+        position = [0, 0, 0.5]
+        intensity_cd = 1000
+        [[receivers]]
+        name = "r"
+        corner = [-1, 1, 1.5]
+        u = [2, 0, 0]
+        v = [0, -2, 0]
+        cells = [8, 8]
+        "#,
+        2_000_000,
+    );
+    let w = 0.25;
+    let z = z_scores(&s.receivers["r"], |i, j| {
+        let x0 = -1.0 + i as f64 * w;
+        let y1 = 1.0 - j as f64 * w;
+        point_source_cell_lx(1000.0, 1.0, x0, x0 + w, y1 - w, y1) + point_source_cell_lx(1000.0, 2.0, x0, x0 + w, y1 - w, y1)
+    });
+    assert_calibrated(&z, "mirror image");
+}
+
+#[test]
+fn glass_slab_at_normal_incidence_transmits_fresnel_series() {
+    let s = run_scene(
+        r#"
+        [materials.glass]
+        reflectance = 0.0
+        specular_transmittance = 1.0
+        ior = 1.5
+        [[objects]]
+        shape = "box"
+        min = [-3, -3, 0.5]
+        max = [3, 3, 0.6]
+        material = "glass"
+        [[lights]]
+        type = "directional"
+        direction = [0, 0, -1]
+        illuminance_lx = 1000
+        [[receivers]]
+        name = "r"
+        corner = [-0.5, -0.5, 0.2]
+        u = [1, 0, 0]
+        v = [0, 1, 0]
+        cells = [4, 4]
+        "#,
+        2_000_000,
+    );
+    let r0: f64 = ((1.5 - 1.0) / (1.5 + 1.0)) * ((1.5 - 1.0) / (1.5 + 1.0));
+    let exact = 1000.0 * (1.0 - r0) * (1.0 - r0) / (1.0 - r0 * r0);
+    let z = z_scores(&s.receivers["r"], |_, _| exact);
+    let r = rms(&z);
+    assert!(r < 1.6, "glass slab: z RMS {r} (16 cells), mean {}", s.receivers["r"].mean);
+}
