@@ -42,10 +42,10 @@ struct RunArgs {
     #[arg(long)]
     photons: Option<u64>,
     /// Stop after this many seconds of tracing.
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, allow_negative_numbers = true, value_name = "SECONDS")]
     time_limit: Option<f64>,
     /// Stop once the target's error is at most this (relative; absolute with --absolute).
-    #[arg(long, value_name = "FRACTION")]
+    #[arg(long, allow_negative_numbers = true, value_name = "FRACTION")]
     target_error: Option<f64>,
     /// What the error target applies to: global, receiver:NAME or receiver:NAME[i0..i1,j0..j1].
     #[arg(long, value_name = "WHAT")]
@@ -72,11 +72,18 @@ struct RunArgs {
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
-        Err(e) => {
-            // --help and --version are not errors.
-            let code = if e.use_stderr() { 2 } else { 0 };
+        // --help and --version are not errors.
+        Err(e) if !e.use_stderr() => {
             let _ = e.print();
-            return ExitCode::from(code);
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => {
+            // clap's message is several lines (tip, usage): keep one.
+            let text = e.to_string();
+            let first = text.lines().next().unwrap_or("bad arguments");
+            let tip = text.lines().find_map(|l| l.trim().strip_prefix("tip: ")).map(|t| format!(" ({t})")).unwrap_or_default();
+            eprintln!("luxtally: {}{tip}; see luxtally --help", first.trim_start_matches("error: "));
+            return ExitCode::from(2);
         }
     };
     let result = match cli.command {

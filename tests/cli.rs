@@ -1,0 +1,113 @@
+//! The command line as a user meets it: outputs of `run`, and one clear line with a
+//! non-zero exit for every kind of bad input.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn luxtally(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_luxtally")).args(args).output().expect("binary runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("luxtally-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Asserts a failed run: exit code 1 (bad input) or 2 (bad usage), one stderr line
+/// containing every `needle`, no panic.
+fn assert_fails_with(out: &Output, needles: &[&str]) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(matches!(out.status.code(), Some(1 | 2)), "exit {:?}, stderr: {err}", out.status.code());
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    assert!(!err.contains("panicked") && !err.contains("RUST_BACKTRACE"), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "`{n}` missing from: {err}");
+    }
+}
+
+#[test]
+fn run_writes_a_summary_with_every_contract_key() {
+    let out_dir = temp_dir("office");
+    let out = luxtally(&["run", "scenes/office.toml", "--photons", "100000", "--quiet", "--out", out_dir.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(out_dir.join("summary.json")).unwrap();
+    let s: serde_json::Value = serde_json::from_str(&text).unwrap();
+    for key in [
+        "scene", "backend", "seed", "threads", "photons_emitted", "rays_traced", "elapsed_s", "stop_reason", "total_flux_lm",
+        "receivers", "global", "history", "forecast",
+    ] {
+        assert!(s.get(key).is_some(), "summary.json lacks `{key}`");
+    }
+    assert_eq!(s["photons_emitted"], 100_000);
+    assert_eq!(s["stop_reason"], "photons");
+    let desk = &s["receivers"]["desk"];
+    for key in ["quantity", "unit", "cells", "values", "sigma", "hits", "mean", "rel_error"] {
+        assert!(desk.get(key).is_some(), "desk lacks `{key}`");
+    }
+    assert_eq!(desk["values"].as_array().unwrap().len(), 64 * 32);
+    for key in ["arithmetic", "quadratic"] {
+        assert!(desk["rel_error"][key].as_f64().unwrap() > 0.0);
+        assert!(s["global"]["rel_error"][key].as_f64().unwrap() > 0.0);
+        assert!(s["global"]["indirect_rel_error"][key].as_f64().unwrap() > 0.0);
+    }
+    for key in ["triangles", "area_m2", "mean_illuminance_lx"] {
+        assert!(s["global"].get(key).is_some(), "global lacks `{key}`");
+    }
+    assert!(s["forecast"].is_null(), "no target error, no forecast");
+    let h = &s["history"][0];
+    for key in ["elapsed_s", "photons", "rel_error"] {
+        assert!(h.get(key).is_some(), "history lacks `{key}`");
+    }
+}
+
+#[test]
+fn missing_scene_file_is_one_line_naming_it() {
+    assert_fails_with(&luxtally(&["run", "no/such/scene.toml", "--quiet"]), &["no/such/scene.toml"]);
+}
+
+#[test]
+fn malformed_scene_is_one_line_naming_file_and_key() {
+    let dir = temp_dir("bad");
+    let path = dir.join("bad.toml");
+    std::fs::write(&path, "[materials.m]\nreflectance = 0.7\nspecular_reflectance = 0.5\n").unwrap();
+    assert_fails_with(&luxtally(&["run", path.to_str().unwrap(), "--quiet"]), &["bad.toml", "materials.m"]);
+    std::fs::write(&path, "[[lights]]\ntype = \"point\"\nposition = [0, nan, 0]\nintensity_cd = 1\n").unwrap();
+    assert_fails_with(&luxtally(&["run", path.to_str().unwrap(), "--quiet"]), &["bad.toml", "lights[0].position"]);
+    std::fs::write(&path, "[[receivers]\nname = 3").unwrap();
+    assert_fails_with(&luxtally(&["run", path.to_str().unwrap(), "--quiet"]), &["bad.toml"]);
+}
+
+#[test]
+fn bad_command_line_values_are_one_line_each() {
+    let out_dir = temp_dir("flags");
+    let out = out_dir.to_str().unwrap();
+    let cases: &[(&[&str], &str)] = &[
+        (&["--target", "receiver:chair"], "--target"),
+        (&["--target", "receiver:desk[0..99,0..1]"], "--target"),
+        (&["--backend", "optix"], "--backend"),
+        (&["--threads", "0"], "--threads"),
+        (&["--target-error", "-1"], "--target-error"),
+        (&["--time-limit", "0"], "--time-limit"),
+        (&["--min-hits", "5", "--target", "global"], "--min-hits"),
+        (&["--photons", "0"], "--photons"),
+        (&["--photons", "many"], "--photons"),
+        (&["--no-such-flag"], "--no-such-flag"),
+    ];
+    for (flags, needle) in cases {
+        let mut args = vec!["run", "scenes/office.toml", "--quiet", "--out", out];
+        args.extend_from_slice(flags);
+        assert_fails_with(&luxtally(&args), &[needle]);
+    }
+}
+
+#[cfg(not(feature = "obvhs"))]
+#[test]
+fn obvhs_backend_without_the_feature_says_how_to_get_it() {
+    let out_dir = temp_dir("noobvhs");
+    assert_fails_with(
+        &luxtally(&["run", "scenes/office.toml", "--quiet", "--backend", "obvhs", "--out", out_dir.to_str().unwrap()]),
+        &["--features obvhs"],
+    );
+}
