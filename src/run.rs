@@ -215,7 +215,7 @@ pub fn run_with(
             Some(StopReason::TargetError)
         } else if options.min_hits.is_some_and(|n| {
             let r = target.receiver().expect("min_hits has a receiver target");
-            min_hits(&target, &scene.receivers, receiver_cells(scene, &tallies, r)) >= n
+            min_hits(&target, &scene.receivers, tallies.receiver_cells(&scene.receivers, r)) >= n
         }) {
             Some(StopReason::MinHits)
         } else if tallies.photons >= max_photons {
@@ -245,7 +245,22 @@ pub fn run_with(
         if let Some(reason) = reason {
             break reason;
         }
-        epoch_photons = next_epoch_photons(count, epoch_start.elapsed().as_secs_f64(), elapsed_s, options.time_limit_s, threads);
+        let hits_goal = options.min_hits.and_then(|n| {
+            let r = target.receiver()?;
+            let fewest = min_hits(&target, &scene.receivers, tallies.receiver_cells(&scene.receivers, r));
+            // Hits grow in proportion to photons.
+            (fewest > 0).then(|| (tallies.photons as f64 * n as f64 / fewest as f64) as u64)
+        });
+        let goal_photons = [latest_forecast.map(|f| f.photons), hits_goal].into_iter().flatten().min();
+        epoch_photons = next_epoch_photons(
+            tallies.photons,
+            count,
+            epoch_start.elapsed().as_secs_f64(),
+            elapsed_s,
+            options.time_limit_s,
+            goal_photons,
+            threads,
+        );
     };
     Ok(RunResult {
         tallies,
@@ -262,12 +277,6 @@ pub fn run_with(
     })
 }
 
-/// The cells of receiver `r` (all receivers' cells are stored back to back).
-fn receiver_cells<'t>(scene: &Scene, tallies: &'t Tallies, r: usize) -> &'t [crate::tally::CellSums] {
-    let first: usize = scene.receivers[..r].iter().map(|x| x.cell_count()).sum();
-    &tallies.cells[first..first + scene.receivers[r].cell_count()]
-}
-
 /// The target's error now: the global map's odd/even error, or the receiver's.
 fn target_error(scene: &Scene, target: &Target, tallies: &Tallies, total_flux_lm: f64, absolute: bool) -> f64 {
     match target.receiver() {
@@ -279,19 +288,36 @@ fn target_error(scene: &Scene, target: &Target, tallies: &Tallies, total_flux_lm
                 m.rel_error.arithmetic
             }
         }
-        Some(r) => receiver_target_error(target, &scene.receivers, receiver_cells(scene, tallies, r), tallies.photons, absolute),
+        Some(r) => receiver_target_error(target, &scene.receivers, tallies.receiver_cells(&scene.receivers, r), tallies.photons, absolute),
     }
 }
 
 /// Epoch sizing: each epoch lasts about a quarter of the time run so far (so the first
 /// forecast comes within the first percent of a long run and merging stays a small
-/// share), between 0.05 s and 2 s, and never runs past the time limit by much.
-fn next_epoch_photons(last_count: u64, last_epoch_s: f64, elapsed_s: f64, time_limit_s: Option<f64>, threads: usize) -> u64 {
+/// share), between 0.05 s and 2 s, and never runs past the time limit by much. When a
+/// stop is predicted within that span (`goal_photons`: the forecast of the error target,
+/// or the projection of `--min-hits`), the epoch ends there instead, but never advances
+/// less than 1 % of the photons so far: runs stop within about 1 % of the photons their
+/// target needs.
+fn next_epoch_photons(
+    done: u64,
+    last_count: u64,
+    last_epoch_s: f64,
+    elapsed_s: f64,
+    time_limit_s: Option<f64>,
+    goal_photons: Option<u64>,
+    threads: usize,
+) -> u64 {
     let rate = last_count as f64 / last_epoch_s.max(1e-6);
     let mut duration = (elapsed_s * 0.25).clamp(0.05, 2.0);
     if let Some(limit) = time_limit_s {
         duration = duration.min((limit - elapsed_s).max(0.0));
     }
-    let chunks = ((rate * duration) / CHUNK_PHOTONS as f64).ceil() as u64;
-    chunks.clamp(threads as u64, 1 << 16) * CHUNK_PHOTONS
+    let mut photons = rate * duration;
+    if let Some(goal) = goal_photons {
+        let to_goal = goal.saturating_sub(done) as f64;
+        photons = photons.min(to_goal.max(0.01 * done as f64));
+    }
+    let chunks = (photons / CHUNK_PHOTONS as f64).ceil() as u64;
+    chunks.clamp(1, 1 << 16).max(if goal_photons.is_some() { 1 } else { threads as u64 }) * CHUNK_PHOTONS
 }

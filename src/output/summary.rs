@@ -3,7 +3,7 @@
 use crate::run::RunState;
 use crate::scene::{Estimator, Quantity};
 use crate::stats::forecast::HistoryPoint;
-use crate::stats::{map_stats, mean_illuminance_sigma_lx, receiver_stats, variance_of_variance, Averaged, MapKind};
+use crate::stats::{figure_of_merit, map_stats, mean_illuminance_sigma_lx, mean_illuminance_vov, reliability, Reliability, receiver_stats, variance_of_variance, Averaged, MapKind};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -27,6 +27,8 @@ pub struct Summary {
     pub photons_killed_by_bounce_cap: u64,
     pub receivers: BTreeMap<String, ReceiverSummary>,
     pub global: GlobalSummary,
+    /// How far the target's error can be trusted (FOM, its stability, VOV).
+    pub reliability: Reliability,
     pub history: Vec<HistoryPoint>,
     pub forecast: Option<ForecastSummary>,
 }
@@ -49,6 +51,8 @@ pub struct ReceiverSummary {
     pub hits: Vec<u64>,
     pub mean: f64,
     pub rel_error: Averaged,
+    /// Figure of merit 1/(σ_rel²·t) of the quadratic mean error.
+    pub fom: f64,
     /// Largest variance of the variance over the cells that scored (MCNP's check:
     /// above 0.1 the σ of that cell is not yet reliable).
     pub max_vov: f64,
@@ -88,7 +92,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
         let max_vov = cells
             .iter()
             .filter(|c| c.hits > 0)
-            .map(|c| variance_of_variance(c, t.photons))
+            .map(|c| variance_of_variance(c.moments.map(|m| m.value()), t.photons))
             .fold(0.0, f64::max);
         let (quantity, unit) = match r.quantity {
             Quantity::Illuminance => ("illuminance", "lx"),
@@ -106,6 +110,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
                 hits: stats.hits,
                 mean: stats.mean,
                 rel_error: stats.rel_error,
+                fom: figure_of_merit(stats.rel_error.quadratic, state.elapsed_s),
                 max_vov,
             },
         );
@@ -144,6 +149,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
             indirect_mean_illuminance_lx: indirect.mean_lx,
             indirect_rel_error: indirect.rel_error,
         },
+        reliability: reliability(state.history, target_vov(state)),
         history: state.history.to_vec(),
         forecast: match (state.options.target_error, state.forecast) {
             (Some(target_error), Some(f)) => Some(ForecastSummary {
@@ -153,6 +159,27 @@ pub fn build(state: &RunState<'_>) -> Summary {
             }),
             _ => None,
         },
+    }
+}
+
+/// The target's VOV: the largest among its cells that scored, or the scene mean's.
+fn target_vov(state: &RunState<'_>) -> f64 {
+    let t = state.tallies;
+    let receivers = &state.scene.receivers;
+    match state.target.receiver() {
+        None => mean_illuminance_vov(t),
+        Some(r) => {
+            let cells = t.receiver_cells(receivers, r);
+            state
+                .target
+                .cells(receivers)
+                .iter()
+                .map(|&c| &cells[c])
+                .filter(|c| c.hits > 0)
+                .map(|c| variance_of_variance(c.moments.map(|m| m.value()), t.photons))
+                .reduce(f64::max)
+                .unwrap_or(1.0)
+        }
     }
 }
 

@@ -35,14 +35,15 @@ pub fn relative_error(value: f64, sigma: f64) -> f64 {
     }
 }
 
-/// Relative variance of the variance (MCNP's VOV) of a cell's mean from its moments:
-/// Σ(x−x̄)⁴ / (Σ(x−x̄)²)² − 1/N. Below 0.1 the cell's σ can be trusted.
-pub fn variance_of_variance(cell: &CellSums, n: u64) -> f64 {
+/// Relative variance of the variance (MCNP's VOV) of a mean from the moments
+/// [Σx, Σx², Σx³, Σx⁴] of N histories: Σ(x−x̄)⁴ / (Σ(x−x̄)²)² − 1/N. Below 0.1 the σ
+/// of that mean can be trusted; 1 when nothing is known yet.
+pub fn variance_of_variance(moments: [f64; 4], n: u64) -> f64 {
     if n < 2 {
         return 1.0;
     }
     let nf = n as f64;
-    let [s1, s2, s3, s4] = cell.moments.map(|m| m.value());
+    let [s1, s2, s3, s4] = moments;
     let m = s1 / nf;
     let c2 = s2 - s1 * m;
     if c2 <= 0.0 {
@@ -211,6 +212,55 @@ pub fn mean_illuminance_sigma_lx(t: &Tallies, total_area_m2: f64, total_flux_lm:
     }
     let (_, sigma_hits) = cell_estimate(t.history_hits[0] as f64, t.history_hits[1] as f64, t.photons);
     total_flux_lm * sigma_hits / total_area_m2
+}
+
+/// VOV of the scene's mean illuminance (from the per-history hit counts).
+pub fn mean_illuminance_vov(t: &Tallies) -> f64 {
+    variance_of_variance(t.history_hits.map(|m| m as f64), t.photons)
+}
+
+/// Figure of merit 1/(σ_rel²·t) (method.md §5): constant while the run converges as
+/// 1/sqrt(t); 0 before any error or time is known.
+pub fn figure_of_merit(rel_error: f64, elapsed_s: f64) -> f64 {
+    if rel_error > 0.0 && elapsed_s > 0.0 {
+        1.0 / (rel_error * rel_error * elapsed_s)
+    } else {
+        0.0
+    }
+}
+
+/// Reliability of the target's error, in the spirit of MCNP's tally checks.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Reliability {
+    /// FOM of the target now.
+    pub fom: f64,
+    /// FOM now against FOM at half the photons: within ±10 % once σ_rel ∝ 1/sqrt(t).
+    pub fom_stable: bool,
+    /// Largest variance of the variance among the target's scored cells (or of the
+    /// scene mean for `global`).
+    pub vov: f64,
+    /// The error can be trusted: FOM stable and VOV < 0.1.
+    pub reliable: bool,
+}
+
+/// Judges the history of (elapsed, photons, error) of a target and its VOV.
+pub fn reliability(history: &[forecast::HistoryPoint], vov: f64) -> Reliability {
+    let fom_at = |p: &forecast::HistoryPoint| figure_of_merit(p.rel_error, p.elapsed_s);
+    let fom = history.last().map_or(0.0, fom_at);
+    let fom_stable = match history.last() {
+        Some(last) if history.len() >= 4 && fom > 0.0 => {
+            let half = history.iter().find(|p| p.photons * 2 >= last.photons).unwrap_or(last);
+            let fom_half = fom_at(half);
+            fom_half > 0.0 && (fom / fom_half - 1.0).abs() < 0.1
+        }
+        _ => false,
+    };
+    Reliability {
+        fom,
+        fom_stable,
+        vov,
+        reliable: fom_stable && vov < 0.1,
+    }
 }
 
 #[cfg(test)]

@@ -20,17 +20,20 @@ pub struct ChunkTally {
     pub rays: u64,
     /// Photons stopped by the bounce cap.
     pub killed_by_bounce_cap: u64,
-    /// Σk and Σk² of k, the surface hits of each photon history: the moments of the
-    /// whole map's total, for the error of the scene's mean illuminance.
-    pub history_hits: [u64; 2],
+    /// Σk, Σk², Σk³, Σk⁴ of k, the surface hits of each photon history: the moments of
+    /// the whole map's total, for the error of the scene's mean illuminance.
+    pub history_hits: [u64; 4],
 }
 
 impl ChunkTally {
     /// A photon history ended after `hits` surface hits.
     #[inline]
     pub fn record_history_hits(&mut self, hits: u32) {
-        self.history_hits[0] += hits as u64;
-        self.history_hits[1] += hits as u64 * hits as u64;
+        let k = hits as u64;
+        self.history_hits[0] += k;
+        self.history_hits[1] += k * k;
+        self.history_hits[2] += k * k * k;
+        self.history_hits[3] += k * k * k * k;
     }
 }
 
@@ -116,8 +119,9 @@ pub struct Tallies {
     pub photons: u64,
     pub rays: u64,
     pub killed_by_bounce_cap: u64,
-    /// Σk, Σk² of surface hits per history (see [`ChunkTally::history_hits`]).
-    pub history_hits: [u64; 2],
+    /// Moments of surface hits per history (see [`ChunkTally::history_hits`]); u128
+    /// keeps Σk⁴ exact over any run.
+    pub history_hits: [u128; 4],
     /// Photon hits per triangle and [`deposit_code`] slot.
     pub triangle_hits: Vec<u64>,
     /// One entry per cell of every receiver, receivers in scene order.
@@ -138,14 +142,21 @@ impl Tallies {
         self.photons += photons;
         self.rays += chunk.rays;
         self.killed_by_bounce_cap += chunk.killed_by_bounce_cap;
-        self.history_hits[0] += chunk.history_hits[0];
-        self.history_hits[1] += chunk.history_hits[1];
+        for (total, part) in self.history_hits.iter_mut().zip(chunk.history_hits) {
+            *total += part as u128;
+        }
         for &code in &chunk.deposits {
             self.triangle_hits[code as usize] += 1;
         }
         for s in &chunk.scores {
             self.cells[s.cell as usize].add(s.score, s.hits);
         }
+    }
+
+    /// The cells of receiver `r` of `receivers` (all receivers' cells lie back to back).
+    pub fn receiver_cells(&self, receivers: &[crate::scene::Receiver], r: usize) -> &[CellSums] {
+        let first: usize = receivers[..r].iter().map(|x| x.cell_count()).sum();
+        &self.cells[first..first + receivers[r].cell_count()]
     }
 
     /// Photons of odd and of even index among the first `photons`.
