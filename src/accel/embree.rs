@@ -249,11 +249,11 @@ impl Drop for EmbreeScene {
 /// incoherent rays, no filter, no instance.
 #[inline]
 fn context() -> sys::RTCIntersectContext {
-    let mut ctx = sys::RTCIntersectContext::default();
-    ctx.flags = sys::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
-    ctx.filter = None;
-    ctx.instID = [INVALID_ID; 1];
-    ctx
+    sys::RTCIntersectContext {
+        flags: sys::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT,
+        filter: None,
+        instID: [INVALID_ID; 1],
+    }
 }
 
 /// Writes one Embree hit into the batch, normalising Embree's unnormalised `Ng`.
