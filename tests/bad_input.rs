@@ -334,7 +334,7 @@ fn mutated_scene_and_mesh_files_never_panic() {
                 let at = (xorshift(&mut state) % bytes.len() as u64) as usize;
                 bytes[at] = (xorshift(&mut state) % 256) as u8;
             }
-            if xorshift(&mut state) % 4 == 0 {
+            if xorshift(&mut state).is_multiple_of(4) {
                 bytes.truncate((xorshift(&mut state) % bytes.len() as u64) as usize);
             }
             if ext == "toml" {

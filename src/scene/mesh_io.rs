@@ -76,7 +76,6 @@ fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> 
         // Points and lines have no area; tobj would turn them into degenerate triangles.
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let mut reader = std::io::Cursor::new(bytes);
@@ -116,7 +115,7 @@ fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> 
 
     for model in &models {
         let m = &model.mesh;
-        if m.positions.len() % 3 != 0 || m.indices.len() % 3 != 0 {
+        if !m.positions.len().is_multiple_of(3) || !m.indices.len().is_multiple_of(3) {
             return Err(format!(
                 "malformed OBJ: model `{}` is incomplete",
                 model.name
@@ -391,7 +390,7 @@ impl GltfWalk<'_> {
                 .collect(),
             None => (0..local.len() as u32).collect(),
         };
-        if indices.len() % 3 != 0 {
+        if !indices.len().is_multiple_of(3) {
             return Err(format!(
                 "{} indices is not a whole number of triangles",
                 indices.len()
