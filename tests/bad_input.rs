@@ -306,3 +306,49 @@ fn bad_receiver_and_simulation_parameters_are_rejected() {
     let m = error_of("[simulation]\ntime_limit = 0\n");
     assert_has(&m, &["simulation.time_limit"]);
 }
+
+/// A small deterministic generator for the mutation test (no dependency needed).
+fn xorshift(state: &mut u64) -> u64 {
+    *state ^= *state << 13;
+    *state ^= *state >> 7;
+    *state ^= *state << 17;
+    *state
+}
+
+#[test]
+fn mutated_scene_and_mesh_files_never_panic() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    for name in [
+        "office.toml",
+        "gltf/Box.gltf",
+        "gltf/OrientationTest.glb",
+        "meshes/cornell_box.obj",
+    ] {
+        let original = std::fs::read(dir.join(name)).unwrap();
+        let ext = name.rsplit('.').next().unwrap_or("bin");
+        for _ in 0..300 {
+            let mut bytes = original.clone();
+            // Overwrite a few random bytes, sometimes truncate.
+            for _ in 0..1 + xorshift(&mut state) % 4 {
+                let at = (xorshift(&mut state) % bytes.len() as u64) as usize;
+                bytes[at] = (xorshift(&mut state) % 256) as u8;
+            }
+            if xorshift(&mut state).is_multiple_of(4) {
+                bytes.truncate((xorshift(&mut state) % bytes.len() as u64) as usize);
+            }
+            if ext == "toml" {
+                let text = String::from_utf8_lossy(&bytes);
+                let _ = scene::load_str(&text, &dir, "mutated.toml");
+            } else {
+                let mesh = write(&format!("mutated.{ext}"), &bytes);
+                let text = format!(
+                    "{GREY}[[objects]]\nfile = \"{}\"\nmaterial = \"grey\"\n",
+                    mesh.display()
+                );
+                let _ = scene::load_str(&text, &dir, "mutated.toml");
+                let _ = std::fs::remove_file(&mesh);
+            }
+        }
+    }
+}

@@ -2,6 +2,9 @@
 //! transformed and merged into one `Geometry`), lights, receivers and `[simulation]`.
 //! Every check names the file and the key at fault.
 
+// `!(x > 0.0)` is deliberate: it also rejects NaN (e.g. from an overflowing cross product).
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use super::file::{
     self, LightFile, MaterialFile, ObjectFile, ReceiverFile, ScaleFile, SimulationFile,
 };

@@ -73,7 +73,9 @@ fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> 
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
-        ..Default::default()
+        // Points and lines have no area; tobj would turn them into degenerate triangles.
+        ignore_points: true,
+        ignore_lines: true,
     };
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let mut reader = std::io::Cursor::new(bytes);
@@ -113,7 +115,7 @@ fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> 
 
     for model in &models {
         let m = &model.mesh;
-        if m.positions.len() % 3 != 0 || m.indices.len() % 3 != 0 {
+        if !m.positions.len().is_multiple_of(3) || !m.indices.len().is_multiple_of(3) {
             return Err(format!(
                 "malformed OBJ: model `{}` is incomplete",
                 model.name
@@ -278,7 +280,35 @@ struct GltfWalk<'a> {
     doc: &'a gltf::Document,
 }
 
+/// gltf-json 1.4.1's validation indexes `accessors[POSITION]` before checking that the
+/// index exists, and panics on a bad one: check that first on the unvalidated JSON.
+fn precheck_gltf(bytes: &[u8]) -> std::result::Result<(), String> {
+    let json: std::borrow::Cow<[u8]> = if bytes.starts_with(b"glTF") {
+        gltf::Glb::from_slice(bytes)
+            .map_err(|e| format!("malformed glTF: {e}"))?
+            .json
+    } else {
+        bytes.into()
+    };
+    let root: gltf::json::Root =
+        gltf::json::deserialize::from_slice(&json).map_err(|e| format!("malformed glTF: {e}"))?;
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            for accessor in primitive.attributes.values() {
+                if accessor.value() >= root.accessors.len() {
+                    return Err(format!(
+                        "malformed glTF: meshes[{m}].primitives[{p}] refers to missing accessor {}",
+                        accessor.value()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 fn load_gltf(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> {
+    precheck_gltf(bytes)?;
     let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| format!("malformed glTF: {e}"))?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let buffers = gltf
@@ -360,7 +390,7 @@ impl GltfWalk<'_> {
                 .collect(),
             None => (0..local.len() as u32).collect(),
         };
-        if indices.len() % 3 != 0 {
+        if !indices.len().is_multiple_of(3) {
             return Err(format!(
                 "{} indices is not a whole number of triangles",
                 indices.len()
