@@ -112,7 +112,7 @@ fn run_until(scene: &Scene, change: impl FnOnce(&mut RunOptions)) -> luxtally::o
 
 #[test]
 fn forecast_at_ten_percent_predicts_the_photons_needed_within_three_percent() {
-    let scene = scene(&point_over_plane(4, 4));
+    let scene = scene(&point_over_plane(6, 6));
     let s = run_until(&scene, |o| {
         o.target_error = Some(0.01);
         o.target = Some("receiver:r".into());
@@ -126,7 +126,7 @@ fn forecast_at_ten_percent_predicts_the_photons_needed_within_three_percent() {
         .expect("a history point at 10 %");
     let predicted = early.forecast_photons.expect("forecast recorded") as f64;
     eprintln!("at {} photons: forecast {predicted}, needed {needed}", early.photons);
-    assert!(early.photons as f64 <= 0.2 * needed, "first point past 10 % is at {} of {needed}", early.photons);
+    assert!(early.photons as f64 <= 0.25 * needed, "first point past 10 % is at {} of {needed}", early.photons);
     assert!((predicted / needed - 1.0).abs() < 0.03, "forecast {predicted} vs {needed}");
     let f = s.forecast.as_ref().expect("final forecast");
     assert_eq!(f.target_error, 0.01);
@@ -158,7 +158,7 @@ fn assert_stopped_at_first_crossing(s: &luxtally::output::summary::Summary, goal
 #[test]
 fn stop_on_relative_error_of_receiver_global_and_block() {
     let scene = scene(&point_over_plane(8, 8));
-    for (target, goal) in [("receiver:r", 0.03), ("global", 0.05), ("receiver:r[2..4,3..6]", 0.04)] {
+    for (target, goal) in [("receiver:r", 0.03), ("global", 0.005), ("receiver:r[2..4,3..6]", 0.04)] {
         let s = run_until(&scene, |o| {
             o.target_error = Some(goal);
             o.target = Some(target.into());

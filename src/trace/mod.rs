@@ -50,6 +50,9 @@ pub struct Tracer<'a> {
     pub max_bounces: u32,
     /// Largest local coordinate: sizes the ray-origin offset near the frame's origin.
     scene_scale: f32,
+    /// How far past a hit a receiver still counts as on the surface hit (m): 10 ppm of
+    /// the scene's size, well above f32 hit-distance errors.
+    receiver_slack: f64,
 }
 
 /// Per-worker buffers, reused from chunk to chunk (their contents never affect results).
@@ -88,6 +91,7 @@ impl<'a> Tracer<'a> {
                 grid
             })
             .collect();
+        let scene_scale = g.vertices.iter().map(|v| v.abs().max_element()).fold(f32::MIN_POSITIVE, f32::max);
         let max_albedo = scene.materials.iter().map(|m| m.albedo()).fold(0.0, f64::max);
         Tracer {
             caster,
@@ -100,7 +104,8 @@ impl<'a> Tracer<'a> {
             receivers,
             seed,
             max_bounces: bounce_cap(max_albedo),
-            scene_scale: g.vertices.iter().map(|v| v.abs().max_element()).fold(f32::MIN_POSITIVE, f32::max),
+            scene_scale,
+            receiver_slack: 1e-5 * scene_scale as f64,
         }
     }
 
@@ -152,9 +157,11 @@ impl<'a> Tracer<'a> {
             let origin = DVec3::new(rays.ox[k] as f64, rays.oy[k] as f64, rays.oz[k] as f64);
             let dir = DVec3::new(rays.dx[k] as f64, rays.dy[k] as f64, rays.dz[k] as f64);
             let tri = hits.tri[k];
-            let t_hit = hits.t[k] as f64;
+            // A receiver lying on the surface hit (within f32 precision) counts the
+            // photon: a receiver placed on a floor measures the floor's illuminance.
+            let t_reach = hits.t[k] as f64 + self.receiver_slack;
             for r in &self.receivers {
-                if let Some(c) = r.crossing(origin, dir, t_hit) {
+                if let Some(c) = r.crossing(origin, dir, t_reach) {
                     s.pending.push((lane.offset, c.cell, c.score_per_lm * flux));
                 }
             }
