@@ -84,40 +84,15 @@ pub fn procedural_geometry(min_triangles: usize) -> Geometry {
     Geometry::from_world(&verts, &tris, &zeros, &zeros)
 }
 
-/// Loads every mesh of an OBJ file (triangulated) as one `Geometry`, optionally
+/// Loads a mesh file (OBJ or glTF) through the scene loader as one `Geometry`,
 /// translated by `offset` in world space.
 pub fn load_obj_geometry(path: &Path, offset: DVec3) -> Result<Geometry> {
-    let options = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ..Default::default()
-    };
-    let (models, _) = tobj::load_obj(path, &options)
-        .map_err(|e| Error::input(path.display().to_string(), e.to_string()))?;
-    let mut verts = Vec::new();
-    let mut tris = Vec::new();
-    for m in &models {
-        let base = verts.len() as u32;
-        let p = &m.mesh.positions;
-        verts.extend(
-            p.chunks_exact(3)
-                .map(|c| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) + offset),
-        );
-        tris.extend(
-            m.mesh
-                .indices
-                .chunks_exact(3)
-                .map(|c| [base + c[0], base + c[1], base + c[2]]),
-        );
-    }
-    if let Some(bad) = tris.iter().flatten().find(|&&i| i as usize >= verts.len()) {
-        return Err(Error::input(
-            path.display().to_string(),
-            format!("vertex index {bad} out of range ({} vertices)", verts.len()),
-        ));
-    }
-    let zeros = vec![0u32; tris.len()];
-    Ok(Geometry::from_world(&verts, &tris, &zeros, &zeros))
+    let file = path.display().to_string().replace('\\', "/");
+    let toml = format!(
+        "[materials.m]\nreflectance = 0.5\n[[objects]]\nfile = \"{file}\"\nmaterial = \"m\"\ntranslate = [{}, {}, {}]\n",
+        offset.x, offset.y, offset.z
+    );
+    Ok(crate::scene::load_str(&toml, Path::new("."), &file)?.geometry)
 }
 
 /// Local-frame bounds of the geometry (zero box when empty).

@@ -29,6 +29,17 @@ enum Command {
     Run(RunArgs),
     /// Print a scene's statistics: triangles, materials, lights, receivers, bounds.
     Info { scene: PathBuf },
+    /// Ray throughput of every backend and ray API on a scene (incoherent random rays),
+    /// with Embree's own C loop over the same rays for comparison.
+    BenchRays {
+        scene: PathBuf,
+        /// Rays per measurement.
+        #[arg(long, default_value_t = 250_000)]
+        rays: usize,
+        /// Threads for the multi-threaded columns (default: all cores).
+        #[arg(long)]
+        threads: Option<usize>,
+    },
 }
 
 #[derive(clap::Args)]
@@ -81,14 +92,26 @@ fn main() -> ExitCode {
             // clap's message is several lines (tip, usage): keep one.
             let text = e.to_string();
             let first = text.lines().next().unwrap_or("bad arguments");
-            let tip = text.lines().find_map(|l| l.trim().strip_prefix("tip: ")).map(|t| format!(" ({t})")).unwrap_or_default();
-            eprintln!("luxtally: {}{tip}; see luxtally --help", first.trim_start_matches("error: "));
+            let tip = text
+                .lines()
+                .find_map(|l| l.trim().strip_prefix("tip: "))
+                .map(|t| format!(" ({t})"))
+                .unwrap_or_default();
+            eprintln!(
+                "luxtally: {}{tip}; see luxtally --help",
+                first.trim_start_matches("error: ")
+            );
             return ExitCode::from(2);
         }
     };
     let result = match cli.command {
         Command::Run(args) => run_command(args),
         Command::Info { scene } => info_command(&scene),
+        Command::BenchRays {
+            scene,
+            rays,
+            threads,
+        } => bench_rays_command(&scene, rays, threads),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -284,5 +307,23 @@ fn info_command(path: &Path) -> Result<()> {
             r.cell_area_m2()
         );
     }
+    Ok(())
+}
+
+fn bench_rays_command(path: &Path, rays: usize, threads: Option<usize>) -> Result<()> {
+    let scene = luxtally::scene::load(path)?;
+    if rays == 0 {
+        return Err(Error::input("--rays", "must be at least 1"));
+    }
+    let threads =
+        threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let table = luxtally::bench::bench_rays(
+        &scene.geometry,
+        &scene.name,
+        rays,
+        threads,
+        cfg!(feature = "obvhs"),
+    )?;
+    print!("{table}");
     Ok(())
 }

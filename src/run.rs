@@ -113,7 +113,12 @@ impl RunResult {
 }
 
 /// Runs the photon pass until a stop criterion is met or `interrupt` is set.
-pub fn run(scene: &Scene, options: &RunOptions, interrupt: &AtomicBool, observer: &mut dyn Observer) -> Result<RunResult> {
+pub fn run(
+    scene: &Scene,
+    options: &RunOptions,
+    interrupt: &AtomicBool,
+    observer: &mut dyn Observer,
+) -> Result<RunResult> {
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
     run_with(scene, options, caster.as_ref(), setup, interrupt, observer)
@@ -134,25 +139,40 @@ pub fn run_with(
         None => Target::Receiver { index: 0 },
     };
     if options.min_hits.is_some() && target == Target::Global {
-        return Err(Error::input("--min-hits", "needs a receiver target (--target receiver:NAME)"));
+        return Err(Error::input(
+            "--min-hits",
+            "needs a receiver target (--target receiver:NAME)",
+        ));
     }
     if let Some(e) = options.target_error {
         if !(e > 0.0 && e.is_finite()) {
-            return Err(Error::input("--target-error", format!("{e} is not a positive number")));
+            return Err(Error::input(
+                "--target-error",
+                format!("{e} is not a positive number"),
+            ));
         }
     }
     if let Some(t) = options.time_limit_s {
         if !(t > 0.0 && t.is_finite()) {
-            return Err(Error::input("--time-limit", format!("{t} is not a positive number of seconds")));
+            return Err(Error::input(
+                "--time-limit",
+                format!("{t} is not a positive number of seconds"),
+            ));
         }
     }
-    if let Some(r) = scene.receivers.iter().find(|r| r.estimator == crate::scene::Estimator::NextEvent) {
+    if let Some(r) = scene
+        .receivers
+        .iter()
+        .find(|r| r.estimator == crate::scene::Estimator::NextEvent)
+    {
         return Err(Error::Unsupported(format!(
             "receiver `{}`: estimator = \"next_event\" is not implemented yet (use \"track\" or \"auto\")",
             r.name
         )));
     }
-    let open_ended = options.time_limit_s.is_none() && options.target_error.is_none() && options.min_hits.is_none();
+    let open_ended = options.time_limit_s.is_none()
+        && options.target_error.is_none()
+        && options.min_hits.is_none();
     let max_photons = options
         .photons
         .or(open_ended.then_some(DEFAULT_PHOTONS))
@@ -180,13 +200,18 @@ pub fn run_with(
         let chunks: Vec<(u64, u32)> = (0..count.div_ceil(CHUNK_PHOTONS))
             .map(|c| {
                 let first = tallies.photons + c * CHUNK_PHOTONS;
-                (first, CHUNK_PHOTONS.min(tallies.photons + count - first) as u32)
+                (
+                    first,
+                    CHUNK_PHOTONS.min(tallies.photons + count - first) as u32,
+                )
             })
             .collect();
         let results: Vec<ChunkTally> = pool.install(|| {
             chunks
                 .par_iter()
-                .map_init(Scratch::default, |scratch, &(first, n)| tracer.trace_chunk(first, n, scratch))
+                .map_init(Scratch::default, |scratch, &(first, n)| {
+                    tracer.trace_chunk(first, n, scratch)
+                })
                 .collect()
         });
         for (chunk, &(_, n)) in results.iter().zip(&chunks) {
@@ -215,7 +240,11 @@ pub fn run_with(
             Some(StopReason::TargetError)
         } else if options.min_hits.is_some_and(|n| {
             let r = target.receiver().expect("min_hits has a receiver target");
-            min_hits(&target, &scene.receivers, tallies.receiver_cells(&scene.receivers, r)) >= n
+            min_hits(
+                &target,
+                &scene.receivers,
+                tallies.receiver_cells(&scene.receivers, r),
+            ) >= n
         }) {
             Some(StopReason::MinHits)
         } else if tallies.photons >= max_photons {
@@ -247,11 +276,18 @@ pub fn run_with(
         }
         let hits_goal = options.min_hits.and_then(|n| {
             let r = target.receiver()?;
-            let fewest = min_hits(&target, &scene.receivers, tallies.receiver_cells(&scene.receivers, r));
+            let fewest = min_hits(
+                &target,
+                &scene.receivers,
+                tallies.receiver_cells(&scene.receivers, r),
+            );
             // Hits grow in proportion to photons.
             (fewest > 0).then(|| (tallies.photons as f64 * n as f64 / fewest as f64) as u64)
         });
-        let goal_photons = [latest_forecast.map(|f| f.photons), hits_goal].into_iter().flatten().min();
+        let goal_photons = [latest_forecast.map(|f| f.photons), hits_goal]
+            .into_iter()
+            .flatten()
+            .min();
         epoch_photons = next_epoch_photons(
             tallies.photons,
             count,
@@ -278,17 +314,34 @@ pub fn run_with(
 }
 
 /// The target's error now: the global map's odd/even error, or the receiver's.
-fn target_error(scene: &Scene, target: &Target, tallies: &Tallies, total_flux_lm: f64, absolute: bool) -> f64 {
+fn target_error(
+    scene: &Scene,
+    target: &Target,
+    tallies: &Tallies,
+    total_flux_lm: f64,
+    absolute: bool,
+) -> f64 {
     match target.receiver() {
         None => {
-            let m = map_stats(tallies, MapKind::Total, &scene.geometry.area_m2, total_flux_lm);
+            let m = map_stats(
+                tallies,
+                MapKind::Total,
+                &scene.geometry.area_m2,
+                total_flux_lm,
+            );
             if absolute {
                 m.sigma_lx
             } else {
                 m.rel_error.arithmetic
             }
         }
-        Some(r) => receiver_target_error(target, &scene.receivers, tallies.receiver_cells(&scene.receivers, r), tallies.photons, absolute),
+        Some(r) => receiver_target_error(
+            target,
+            &scene.receivers,
+            tallies.receiver_cells(&scene.receivers, r),
+            tallies.photons,
+            absolute,
+        ),
     }
 }
 
@@ -319,5 +372,9 @@ fn next_epoch_photons(
         photons = photons.min(to_goal.max(0.01 * done as f64));
     }
     let chunks = (photons / CHUNK_PHOTONS as f64).ceil() as u64;
-    chunks.clamp(1, 1 << 16).max(if goal_photons.is_some() { 1 } else { threads as u64 }) * CHUNK_PHOTONS
+    chunks.clamp(1, 1 << 16).max(if goal_photons.is_some() {
+        1
+    } else {
+        threads as u64
+    }) * CHUNK_PHOTONS
 }

@@ -51,7 +51,11 @@ fn receiver_sigma_is_calibrated_68_percent_within_one_sigma() {
     let z = z_scores(&s.receivers["r"], point_over_plane_exact(32, 32));
     assert_calibrated(&z, "32 × 32 receiver");
     let inside = z.iter().filter(|x| x.abs() <= 1.0).count() as f64 / z.len() as f64;
-    assert!((0.62..=0.74).contains(&inside), "{:.1} % of cells within 1σ", 100.0 * inside);
+    assert!(
+        (0.62..=0.74).contains(&inside),
+        "{:.1} % of cells within 1σ",
+        100.0 * inside
+    );
 }
 
 /// Solid angle of the triangle (a, b, c) seen from the origin (Van Oosterom & Strackee).
@@ -93,17 +97,33 @@ fn global_odd_even_error_matches_the_actual_map_error() {
     for (k, tri) in g.triangles.iter().enumerate() {
         let [a, b, c] = tri.map(|i| g.vertices[i as usize].as_dvec3() + g.origin);
         let exact = flux * solid_angle(a, b, c) / (4.0 * PI * g.area_m2[k]) + indirect;
-        let e = triangle_illuminance_lx(&result.tallies, MapKind::Total, k, g.area_m2[k], result.total_flux_lm, None);
+        let e = triangle_illuminance_lx(
+            &result.tallies,
+            MapKind::Total,
+            k,
+            g.area_m2[k],
+            result.total_flux_lm,
+            None,
+        );
         sum_sq += g.area_m2[k] * (e - exact).powi(2);
     }
     let actual = (sum_sq / area).sqrt();
     let s = luxtally::output::summary::build(&result.state(&scene, &opts));
     let ratio = s.global.sigma_lx / actual;
-    eprintln!("reported σ {} lx, actual RMS error {actual} lx, ratio {ratio:.3}", s.global.sigma_lx);
-    assert!((0.85..=1.15).contains(&ratio), "reported/actual = {ratio:.3}");
+    eprintln!(
+        "reported σ {} lx, actual RMS error {actual} lx, ratio {ratio:.3}",
+        s.global.sigma_lx
+    );
+    assert!(
+        (0.85..=1.15).contains(&ratio),
+        "reported/actual = {ratio:.3}"
+    );
 }
 
-fn run_until(scene: &Scene, change: impl FnOnce(&mut RunOptions)) -> luxtally::output::summary::Summary {
+fn run_until(
+    scene: &Scene,
+    change: impl FnOnce(&mut RunOptions),
+) -> luxtally::output::summary::Summary {
     let mut opts = options(scene, 0, 2, Backend::Embree);
     opts.photons = None;
     change(&mut opts);
@@ -125,9 +145,19 @@ fn forecast_at_ten_percent_predicts_the_photons_needed_within_three_percent() {
         .find(|p| p.photons as f64 >= 0.1 * needed)
         .expect("a history point at 10 %");
     let predicted = early.forecast_photons.expect("forecast recorded") as f64;
-    eprintln!("at {} photons: forecast {predicted}, needed {needed}", early.photons);
-    assert!(early.photons as f64 <= 0.25 * needed, "first point past 10 % is at {} of {needed}", early.photons);
-    assert!((predicted / needed - 1.0).abs() < 0.03, "forecast {predicted} vs {needed}");
+    eprintln!(
+        "at {} photons: forecast {predicted}, needed {needed}",
+        early.photons
+    );
+    assert!(
+        early.photons as f64 <= 0.25 * needed,
+        "first point past 10 % is at {} of {needed}",
+        early.photons
+    );
+    assert!(
+        (predicted / needed - 1.0).abs() < 0.03,
+        "forecast {predicted} vs {needed}"
+    );
     let f = s.forecast.as_ref().expect("final forecast");
     assert_eq!(f.target_error, 0.01);
 }
@@ -136,7 +166,10 @@ fn forecast_at_ten_percent_predicts_the_photons_needed_within_three_percent() {
 fn stop_on_photons_emits_exactly_that_many() {
     let scene = scene(&point_over_plane(4, 4));
     let s = run_until(&scene, |o| o.photons = Some(123_457));
-    assert_eq!((s.stop_reason, s.photons_emitted), (Some("photons"), 123_457));
+    assert_eq!(
+        (s.stop_reason, s.photons_emitted),
+        (Some("photons"), 123_457)
+    );
 }
 
 #[test]
@@ -144,21 +177,37 @@ fn stop_on_time_limit_stops_just_after_it() {
     let scene = scene(&point_over_plane(4, 4));
     let s = run_until(&scene, |o| o.time_limit_s = Some(1.0));
     assert_eq!(s.stop_reason, Some("time"));
-    assert!(s.elapsed_s >= 1.0 && s.elapsed_s < 1.5, "stopped after {} s", s.elapsed_s);
+    assert!(
+        s.elapsed_s >= 1.0 && s.elapsed_s < 1.5,
+        "stopped after {} s",
+        s.elapsed_s
+    );
 }
 
 /// The last history point meets `goal` and the one before does not.
 fn assert_stopped_at_first_crossing(s: &luxtally::output::summary::Summary, goal: f64) {
     let n = s.history.len();
     assert!(n >= 2);
-    assert!(s.history[n - 1].rel_error <= goal, "last error {}", s.history[n - 1].rel_error);
-    assert!(s.history[n - 2].rel_error > goal, "error {} already met before", s.history[n - 2].rel_error);
+    assert!(
+        s.history[n - 1].rel_error <= goal,
+        "last error {}",
+        s.history[n - 1].rel_error
+    );
+    assert!(
+        s.history[n - 2].rel_error > goal,
+        "error {} already met before",
+        s.history[n - 2].rel_error
+    );
 }
 
 #[test]
 fn stop_on_relative_error_of_receiver_global_and_block() {
     let scene = scene(&point_over_plane(8, 8));
-    for (target, goal) in [("receiver:r", 0.03), ("global", 0.005), ("receiver:r[2..4,3..6]", 0.04)] {
+    for (target, goal) in [
+        ("receiver:r", 0.03),
+        ("global", 0.005),
+        ("receiver:r[2..4,3..6]", 0.04),
+    ] {
         let s = run_until(&scene, |o| {
             o.target_error = Some(goal);
             o.target = Some(target.into());
@@ -215,7 +264,10 @@ fn combined_criteria_first_met_wins() {
         o.photons = Some(50_000);
         o.target_error = Some(0.01);
     });
-    assert_eq!((s.stop_reason, s.photons_emitted), (Some("photons"), 50_000));
+    assert_eq!(
+        (s.stop_reason, s.photons_emitted),
+        (Some("photons"), 50_000)
+    );
     // A loose target comes before a long time limit and a large photon count.
     let s = run_until(&scene, |o| {
         o.photons = Some(1_000_000_000);

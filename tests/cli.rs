@@ -5,7 +5,10 @@ use std::path::PathBuf;
 use std::process::{Command, Output};
 
 fn luxtally(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_luxtally")).args(args).output().expect("binary runs")
+    Command::new(env!("CARGO_BIN_EXE_luxtally"))
+        .args(args)
+        .output()
+        .expect("binary runs")
 }
 
 fn temp_dir(name: &str) -> PathBuf {
@@ -19,9 +22,16 @@ fn temp_dir(name: &str) -> PathBuf {
 /// containing every `needle`, no panic.
 fn assert_fails_with(out: &Output, needles: &[&str]) {
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(matches!(out.status.code(), Some(1 | 2)), "exit {:?}, stderr: {err}", out.status.code());
+    assert!(
+        matches!(out.status.code(), Some(1 | 2)),
+        "exit {:?}, stderr: {err}",
+        out.status.code()
+    );
     assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
-    assert!(!err.contains("panicked") && !err.contains("RUST_BACKTRACE"), "{err}");
+    assert!(
+        !err.contains("panicked") && !err.contains("RUST_BACKTRACE"),
+        "{err}"
+    );
     for n in needles {
         assert!(err.contains(n), "`{n}` missing from: {err}");
     }
@@ -30,20 +40,52 @@ fn assert_fails_with(out: &Output, needles: &[&str]) {
 #[test]
 fn run_writes_a_summary_with_every_contract_key() {
     let out_dir = temp_dir("office");
-    let out = luxtally(&["run", "scenes/office.toml", "--photons", "100000", "--quiet", "--out", out_dir.to_str().unwrap()]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = luxtally(&[
+        "run",
+        "scenes/office.toml",
+        "--photons",
+        "100000",
+        "--quiet",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = std::fs::read_to_string(out_dir.join("summary.json")).unwrap();
     let s: serde_json::Value = serde_json::from_str(&text).unwrap();
     for key in [
-        "scene", "backend", "seed", "threads", "photons_emitted", "rays_traced", "elapsed_s", "stop_reason", "total_flux_lm",
-        "receivers", "global", "history", "forecast",
+        "scene",
+        "backend",
+        "seed",
+        "threads",
+        "photons_emitted",
+        "rays_traced",
+        "elapsed_s",
+        "stop_reason",
+        "total_flux_lm",
+        "receivers",
+        "global",
+        "history",
+        "forecast",
     ] {
         assert!(s.get(key).is_some(), "summary.json lacks `{key}`");
     }
     assert_eq!(s["photons_emitted"], 100_000);
     assert_eq!(s["stop_reason"], "photons");
     let desk = &s["receivers"]["desk"];
-    for key in ["quantity", "unit", "cells", "values", "sigma", "hits", "mean", "rel_error"] {
+    for key in [
+        "quantity",
+        "unit",
+        "cells",
+        "values",
+        "sigma",
+        "hits",
+        "mean",
+        "rel_error",
+    ] {
         assert!(desk.get(key).is_some(), "desk lacks `{key}`");
     }
     assert_eq!(desk["values"].as_array().unwrap().len(), 64 * 32);
@@ -64,19 +106,39 @@ fn run_writes_a_summary_with_every_contract_key() {
 
 #[test]
 fn missing_scene_file_is_one_line_naming_it() {
-    assert_fails_with(&luxtally(&["run", "no/such/scene.toml", "--quiet"]), &["no/such/scene.toml"]);
+    assert_fails_with(
+        &luxtally(&["run", "no/such/scene.toml", "--quiet"]),
+        &["no/such/scene.toml"],
+    );
 }
 
 #[test]
 fn malformed_scene_is_one_line_naming_file_and_key() {
     let dir = temp_dir("bad");
     let path = dir.join("bad.toml");
-    std::fs::write(&path, "[materials.m]\nreflectance = 0.7\nspecular_reflectance = 0.5\n").unwrap();
-    assert_fails_with(&luxtally(&["run", path.to_str().unwrap(), "--quiet"]), &["bad.toml", "materials.m"]);
-    std::fs::write(&path, "[[lights]]\ntype = \"point\"\nposition = [0, nan, 0]\nintensity_cd = 1\n").unwrap();
-    assert_fails_with(&luxtally(&["run", path.to_str().unwrap(), "--quiet"]), &["bad.toml", "lights[0].position"]);
+    std::fs::write(
+        &path,
+        "[materials.m]\nreflectance = 0.7\nspecular_reflectance = 0.5\n",
+    )
+    .unwrap();
+    assert_fails_with(
+        &luxtally(&["run", path.to_str().unwrap(), "--quiet"]),
+        &["bad.toml", "materials.m"],
+    );
+    std::fs::write(
+        &path,
+        "[[lights]]\ntype = \"point\"\nposition = [0, nan, 0]\nintensity_cd = 1\n",
+    )
+    .unwrap();
+    assert_fails_with(
+        &luxtally(&["run", path.to_str().unwrap(), "--quiet"]),
+        &["bad.toml", "lights[0].position"],
+    );
     std::fs::write(&path, "[[receivers]\nname = 3").unwrap();
-    assert_fails_with(&luxtally(&["run", path.to_str().unwrap(), "--quiet"]), &["bad.toml"]);
+    assert_fails_with(
+        &luxtally(&["run", path.to_str().unwrap(), "--quiet"]),
+        &["bad.toml"],
+    );
 }
 
 #[test]
@@ -107,7 +169,15 @@ fn bad_command_line_values_are_one_line_each() {
 fn obvhs_backend_without_the_feature_says_how_to_get_it() {
     let out_dir = temp_dir("noobvhs");
     assert_fails_with(
-        &luxtally(&["run", "scenes/office.toml", "--quiet", "--backend", "obvhs", "--out", out_dir.to_str().unwrap()]),
+        &luxtally(&[
+            "run",
+            "scenes/office.toml",
+            "--quiet",
+            "--backend",
+            "obvhs",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]),
         &["--features obvhs"],
     );
 }

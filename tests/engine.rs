@@ -22,14 +22,20 @@ fn same_seed_gives_bit_identical_results_on_one_and_two_threads() {
     assert_eq!(a.sigma, b.sigma);
     assert_eq!(a.hits, b.hits);
     assert_eq!(one.rays_traced, two.rays_traced);
-    assert_eq!(one.global.mean_illuminance_lx, two.global.mean_illuminance_lx);
+    assert_eq!(
+        one.global.mean_illuminance_lx,
+        two.global.mean_illuminance_lx
+    );
     assert_eq!(one.global.rel_error, two.global.rel_error);
     let reseeded = luxtally::run::RunOptions {
         seed: 2,
         ..options(&scene, 300_001, 2, Backend::Embree)
     };
     let three = run_options(&scene, &reseeded);
-    assert_ne!(a.values, three.receivers["desk"].values, "another seed differs");
+    assert_ne!(
+        a.values, three.receivers["desk"].values,
+        "another seed differs"
+    );
 }
 
 #[cfg(feature = "obvhs")]
@@ -42,7 +48,13 @@ fn embree_and_obvhs_agree_within_half_sigma_per_cell() {
     let (a, b) = (&e.receivers["desk"], &o.receivers["desk"]);
     for k in 0..a.values.len() {
         let tol = 0.5 * a.sigma[k].max(b.sigma[k]);
-        assert!((a.values[k] - b.values[k]).abs() <= tol, "cell {k}: {} vs {} (σ {})", a.values[k], b.values[k], a.sigma[k]);
+        assert!(
+            (a.values[k] - b.values[k]).abs() <= tol,
+            "cell {k}: {} vs {} (σ {})",
+            a.values[k],
+            b.values[k],
+            a.sigma[k]
+        );
     }
 }
 
@@ -92,9 +104,18 @@ fn tiny_and_huge_rooms_give_the_same_illuminance_after_scaling() {
         .collect();
     // Same seed: the runs are correlated, so a sound result is well inside 1.
     assert!(rms(&z) < 1.0, "z RMS {}", rms(&z));
-    let (ga, gb) = (a.global.mean_illuminance_lx * small * small, b.global.mean_illuminance_lx * large * large);
-    assert!((ga - gb).abs() < 3.0 * a.global.mean_sigma_lx * small * small, "{ga} vs {gb}");
-    assert_eq!(a.photons_killed_by_bounce_cap + b.photons_killed_by_bounce_cap, 0);
+    let (ga, gb) = (
+        a.global.mean_illuminance_lx * small * small,
+        b.global.mean_illuminance_lx * large * large,
+    );
+    assert!(
+        (ga - gb).abs() < 3.0 * a.global.mean_sigma_lx * small * small,
+        "{ga} vs {gb}"
+    );
+    assert_eq!(
+        a.photons_killed_by_bounce_cap + b.photons_killed_by_bounce_cap,
+        0
+    );
 }
 
 /// Every number of a summary, as JSON, is finite (serde_json writes NaN as null).
@@ -102,10 +123,19 @@ fn assert_all_finite(s: &luxtally::output::summary::Summary) {
     let json = serde_json::to_value(s).unwrap();
     fn walk(v: &serde_json::Value, path: &str) {
         match v {
-            serde_json::Value::Number(n) => assert!(n.as_f64().is_some_and(f64::is_finite), "{path}: {n}"),
-            serde_json::Value::Array(a) => a.iter().enumerate().for_each(|(i, x)| walk(x, &format!("{path}[{i}]"))),
-            serde_json::Value::Object(o) => o.iter().for_each(|(k, x)| walk(x, &format!("{path}.{k}"))),
-            serde_json::Value::Null if path != ".forecast" && !path.ends_with("stop_reason") => panic!("{path} is null"),
+            serde_json::Value::Number(n) => {
+                assert!(n.as_f64().is_some_and(f64::is_finite), "{path}: {n}")
+            }
+            serde_json::Value::Array(a) => a
+                .iter()
+                .enumerate()
+                .for_each(|(i, x)| walk(x, &format!("{path}[{i}]"))),
+            serde_json::Value::Object(o) => {
+                o.iter().for_each(|(k, x)| walk(x, &format!("{path}.{k}")))
+            }
+            serde_json::Value::Null if path != ".forecast" && !path.ends_with("stop_reason") => {
+                panic!("{path} is null")
+            }
             _ => {}
         }
     }

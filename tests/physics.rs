@@ -70,8 +70,12 @@ fn lambertian_square_emitter_matches_view_factor() {
     // The formula itself: straight below the centre of a square of side 2a at height h.
     let centre = point_lx(0.0, 0.0);
     let a: f64 = 0.5;
-    let exact_centre = 2.0 * luminance * (a / (a * a + h * h).sqrt()) * 2.0 * (a / (a * a + h * h).sqrt()).atan();
-    assert!((centre - exact_centre).abs() < 1e-9 * exact_centre, "{centre} vs {exact_centre}");
+    let exact_centre =
+        2.0 * luminance * (a / (a * a + h * h).sqrt()) * 2.0 * (a / (a * a + h * h).sqrt()).atan();
+    assert!(
+        (centre - exact_centre).abs() < 1e-9 * exact_centre,
+        "{centre} vs {exact_centre}"
+    );
     let z = z_scores(&s.receivers["r"], |i, j| {
         let (x0, y0) = (-1.0 + i as f64 * 0.125, -1.0 + j as f64 * 0.125);
         cell_average(point_lx, x0, x0 + 0.125, y0, y0 + 0.125)
@@ -230,7 +234,8 @@ fn mirror_adds_the_image_of_the_source() {
     let z = z_scores(&s.receivers["r"], |i, j| {
         let x0 = -1.0 + i as f64 * w;
         let y1 = 1.0 - j as f64 * w;
-        point_source_cell_lx(1000.0, 1.0, x0, x0 + w, y1 - w, y1) + point_source_cell_lx(1000.0, 2.0, x0, x0 + w, y1 - w, y1)
+        point_source_cell_lx(1000.0, 1.0, x0, x0 + w, y1 - w, y1)
+            + point_source_cell_lx(1000.0, 2.0, x0, x0 + w, y1 - w, y1)
     });
     assert_calibrated(&z, "mirror image");
 }
@@ -265,5 +270,9 @@ fn glass_slab_at_normal_incidence_transmits_fresnel_series() {
     let exact = 1000.0 * (1.0 - r0) * (1.0 - r0) / (1.0 - r0 * r0);
     let z = z_scores(&s.receivers["r"], |_, _| exact);
     let r = rms(&z);
-    assert!(r < 1.6, "glass slab: z RMS {r} (16 cells), mean {}", s.receivers["r"].mean);
+    assert!(
+        r < 1.6,
+        "glass slab: z RMS {r} (16 cells), mean {}",
+        s.receivers["r"].mean
+    );
 }

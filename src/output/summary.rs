@@ -3,7 +3,10 @@
 use crate::run::RunState;
 use crate::scene::{Estimator, Quantity};
 use crate::stats::forecast::HistoryPoint;
-use crate::stats::{figure_of_merit, map_stats, mean_illuminance_sigma_lx, mean_illuminance_vov, reliability, Reliability, receiver_stats, variance_of_variance, Averaged, MapKind};
+use crate::stats::{
+    figure_of_merit, map_stats, mean_illuminance_sigma_lx, mean_illuminance_vov, receiver_stats,
+    reliability, variance_of_variance, Averaged, MapKind, Reliability,
+};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -133,7 +136,10 @@ pub fn build(state: &RunState<'_>) -> Summary {
             .lights
             .iter()
             .zip(state.light_flux_lm)
-            .map(|(l, f)| LightSummary { label: l.label.clone(), flux_lm: *f })
+            .map(|(l, f)| LightSummary {
+                label: l.label.clone(),
+                flux_lm: *f,
+            })
             .collect(),
         target: state.target.describe(&scene.receivers),
         bounce_cap: state.bounce_cap,

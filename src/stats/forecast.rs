@@ -74,7 +74,13 @@ fn photon_rate(history: &[HistoryPoint]) -> Option<f64> {
     } else if history.len() >= 2 {
         history[0]
     } else {
-        HistoryPoint { elapsed_s: 0.0, photons: 0, rel_error: 0.0, forecast_s: None, forecast_photons: None }
+        HistoryPoint {
+            elapsed_s: 0.0,
+            photons: 0,
+            rel_error: 0.0,
+            forecast_s: None,
+            forecast_photons: None,
+        }
     };
     let dt = last.elapsed_s - first.elapsed_s;
     let dn = (last.photons - first.photons) as f64;
@@ -86,7 +92,13 @@ mod tests {
     use super::*;
 
     fn point(t: f64, n: u64, err: f64) -> HistoryPoint {
-        HistoryPoint { elapsed_s: t, photons: n, rel_error: err, forecast_s: None, forecast_photons: None }
+        HistoryPoint {
+            elapsed_s: t,
+            photons: n,
+            rel_error: err,
+            forecast_s: None,
+            forecast_photons: None,
+        }
     }
 
     #[test]

@@ -64,7 +64,13 @@ pub struct Averaged {
 /// the mean by arithmetic and quadratic averaging of the values.
 pub fn mean_error(values: &[f64], sigmas: &[f64]) -> (f64, Averaged) {
     if values.is_empty() {
-        return (0.0, Averaged { arithmetic: REL_ERROR_UNKNOWN, quadratic: REL_ERROR_UNKNOWN });
+        return (
+            0.0,
+            Averaged {
+                arithmetic: REL_ERROR_UNKNOWN,
+                quadratic: REL_ERROR_UNKNOWN,
+            },
+        );
     }
     let k = values.len() as f64;
     let mean = values.iter().sum::<f64>() / k;
@@ -167,7 +173,10 @@ pub fn map_stats(t: &Tallies, kind: MapKind, areas_m2: &[f64], total_flux_lm: f6
     let (n_odd, n_even) = t.odd_even_photons();
     if total_area <= 0.0 || t.photons == 0 {
         return MapStats {
-            rel_error: Averaged { arithmetic: REL_ERROR_UNKNOWN, quadratic: REL_ERROR_UNKNOWN },
+            rel_error: Averaged {
+                arithmetic: REL_ERROR_UNKNOWN,
+                quadratic: REL_ERROR_UNKNOWN,
+            },
             ..MapStats::default()
         };
     }
@@ -194,7 +203,10 @@ pub fn map_stats(t: &Tallies, kind: MapKind, areas_m2: &[f64], total_flux_lm: f6
         mean_lx,
         sigma_lx,
         rel_error: if unknown {
-            Averaged { arithmetic: REL_ERROR_UNKNOWN, quadratic: REL_ERROR_UNKNOWN }
+            Averaged {
+                arithmetic: REL_ERROR_UNKNOWN,
+                quadratic: REL_ERROR_UNKNOWN,
+            }
         } else {
             Averaged {
                 arithmetic: relative_error(mean_lx, sigma_lx),
@@ -210,7 +222,11 @@ pub fn mean_illuminance_sigma_lx(t: &Tallies, total_area_m2: f64, total_flux_lm:
     if total_area_m2 <= 0.0 {
         return 0.0;
     }
-    let (_, sigma_hits) = cell_estimate(t.history_hits[0] as f64, t.history_hits[1] as f64, t.photons);
+    let (_, sigma_hits) = cell_estimate(
+        t.history_hits[0] as f64,
+        t.history_hits[1] as f64,
+        t.photons,
+    );
     total_flux_lm * sigma_hits / total_area_m2
 }
 
@@ -249,7 +265,10 @@ pub fn reliability(history: &[forecast::HistoryPoint], vov: f64) -> Reliability 
     let fom = history.last().map_or(0.0, fom_at);
     let fom_stable = match history.last() {
         Some(last) if history.len() >= 4 && fom > 0.0 => {
-            let half = history.iter().find(|p| p.photons * 2 >= last.photons).unwrap_or(last);
+            let half = history
+                .iter()
+                .find(|p| p.photons * 2 >= last.photons)
+                .unwrap_or(last);
             let fom_half = fom_at(half);
             fom_half > 0.0 && (fom / fom_half - 1.0).abs() < 0.1
         }

@@ -14,7 +14,11 @@ pub enum Target {
     /// A receiver's mean error (eq. 9, quadratic averaging).
     Receiver { index: usize },
     /// The worst cell of a block of a receiver, half-open ranges i0..i1, j0..j1.
-    Block { index: usize, i: (u32, u32), j: (u32, u32) },
+    Block {
+        index: usize,
+        i: (u32, u32),
+        j: (u32, u32),
+    },
 }
 
 impl Target {
@@ -45,10 +49,18 @@ impl Target {
             let (a, b) = s
                 .split_once("..")
                 .ok_or_else(|| bad(format!("`{text}`: range `{s}` is not `a..b`")))?;
-            let a: u32 = a.trim().parse().map_err(|_| bad(format!("`{text}`: `{a}` is not a cell index")))?;
-            let b: u32 = b.trim().parse().map_err(|_| bad(format!("`{text}`: `{b}` is not a cell index")))?;
+            let a: u32 = a
+                .trim()
+                .parse()
+                .map_err(|_| bad(format!("`{text}`: `{a}` is not a cell index")))?;
+            let b: u32 = b
+                .trim()
+                .parse()
+                .map_err(|_| bad(format!("`{text}`: `{b}` is not a cell index")))?;
             if a >= b || b > n {
-                return Err(bad(format!("`{text}`: range {a}..{b} is empty or beyond the {n} cells")));
+                return Err(bad(format!(
+                    "`{text}`: range {a}..{b} is empty or beyond the {n} cells"
+                )));
             }
             Ok((a, b))
         };
@@ -92,7 +104,10 @@ impl Target {
             Target::Global => "global".into(),
             Target::Receiver { index } => format!("receiver:{}", receivers[index].name),
             Target::Block { index, i, j } => {
-                format!("receiver:{}[{}..{},{}..{}]", receivers[index].name, i.0, i.1, j.0, j.1)
+                format!(
+                    "receiver:{}[{}..{},{}..{}]",
+                    receivers[index].name, i.0, i.1, j.0, j.1
+                )
             }
         }
     }
@@ -101,7 +116,13 @@ impl Target {
 /// The target's current error for a receiver target: relative (eq. 9 quadratic for a
 /// whole receiver, the worst cell's σ_rel for a block) or absolute (RMS σ, or the worst
 /// cell's σ, in the receiver's unit).
-pub fn receiver_target_error(target: &Target, receivers: &[Receiver], cells: &[CellSums], photons: u64, absolute: bool) -> f64 {
+pub fn receiver_target_error(
+    target: &Target,
+    receivers: &[Receiver],
+    cells: &[CellSums],
+    photons: u64,
+    absolute: bool,
+) -> f64 {
     let cell_ids = target.cells(receivers);
     let picked: Vec<CellSums> = cell_ids.iter().map(|&c| cells[c]).collect();
     let stats = receiver_stats(&picked, photons);
@@ -178,11 +199,27 @@ mod tests {
     fn targets_parse_and_reject_with_a_reason() {
         let r = receivers();
         assert_eq!(Target::parse("global", &r).unwrap(), Target::Global);
-        assert_eq!(Target::parse("receiver:desk", &r).unwrap(), Target::Receiver { index: 0 });
+        assert_eq!(
+            Target::parse("receiver:desk", &r).unwrap(),
+            Target::Receiver { index: 0 }
+        );
         let block = Target::parse("receiver:desk[2..4,1..3]", &r).unwrap();
-        assert_eq!(block, Target::Block { index: 0, i: (2, 4), j: (1, 3) });
+        assert_eq!(
+            block,
+            Target::Block {
+                index: 0,
+                i: (2, 4),
+                j: (1, 3)
+            }
+        );
         assert_eq!(block.cells(&r), vec![10, 11, 18, 19]);
-        for bad in ["receiver:chair", "receiver:desk[0..9,0..1]", "receiver:desk[3..3,0..1]", "wall", "receiver:desk[0..1]"] {
+        for bad in [
+            "receiver:chair",
+            "receiver:desk[0..9,0..1]",
+            "receiver:desk[3..3,0..1]",
+            "wall",
+            "receiver:desk[0..1]",
+        ] {
             let e = Target::parse(bad, &r).unwrap_err().to_string();
             assert!(e.starts_with("--target: "), "{e}");
         }

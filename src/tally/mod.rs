@@ -56,7 +56,10 @@ pub const CODES_PER_TRIANGLE: usize = 8;
 /// photon index's parity (the odd/even maps of method.md §3).
 #[inline]
 pub fn deposit_code(triangle: u32, back_face: bool, indirect: bool, odd_photon: bool) -> u32 {
-    triangle * CODES_PER_TRIANGLE as u32 + ((back_face as u32) << 2) + ((indirect as u32) << 1) + odd_photon as u32
+    triangle * CODES_PER_TRIANGLE as u32
+        + ((back_face as u32) << 2)
+        + ((indirect as u32) << 1)
+        + odd_photon as u32
 }
 
 /// Neumaier-compensated f64 sum: stays exact to ~1 ulp over billions of terms.

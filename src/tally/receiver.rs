@@ -146,7 +146,13 @@ mod tests {
         let c = g.crossing(o, -DVec3::Z, 10.0).unwrap();
         assert_eq!(c.cell, 10 + 4 + 3);
         assert!((c.score_per_lm - 1.0 / 0.25).abs() < 1e-12);
-        assert!(g.crossing(o, -DVec3::Z, 2.0).is_none(), "stops before the plane");
-        assert!(g.crossing(o - DVec3::Z * 4.0, DVec3::Z, 10.0).is_none(), "back face");
+        assert!(
+            g.crossing(o, -DVec3::Z, 2.0).is_none(),
+            "stops before the plane"
+        );
+        assert!(
+            g.crossing(o - DVec3::Z * 4.0, DVec3::Z, 10.0).is_none(),
+            "back face"
+        );
     }
 }

@@ -60,12 +60,20 @@ pub fn light_flux_lm(kind: &LightKind, scene_radius: f64) -> f64 {
             falloff_deg,
             ..
         } => {
-            let (cos_cone, cos_falloff) = (cone_deg.to_radians().cos(), falloff_deg.to_radians().cos());
+            let (cos_cone, cos_falloff) =
+                (cone_deg.to_radians().cos(), falloff_deg.to_radians().cos());
             // ∫ I dω: full core, plus the smoothstep ramp whose mean over cos θ is 1/2.
             TAU * intensity_cd * ((1.0 - cos_falloff) + 0.5 * (cos_falloff - cos_cone))
         }
-        LightKind::Directional { illuminance_lx, .. } => illuminance_lx * PI * scene_radius * scene_radius,
-        LightKind::Area { u, v, luminance_cdm2, .. } => PI * luminance_cdm2 * u.cross(v).length(),
+        LightKind::Directional { illuminance_lx, .. } => {
+            illuminance_lx * PI * scene_radius * scene_radius
+        }
+        LightKind::Area {
+            u,
+            v,
+            luminance_cdm2,
+            ..
+        } => PI * luminance_cdm2 * u.cross(v).length(),
     }
 }
 
@@ -177,8 +185,16 @@ impl Emitters {
                 direction,
                 disk_center,
                 disk_radius,
-            } => (uniform_disk(rng, disk_center, direction, disk_radius), direction),
-            Emitter::Area { corner, u, v, normal } => {
+            } => (
+                uniform_disk(rng, disk_center, direction, disk_radius),
+                direction,
+            ),
+            Emitter::Area {
+                corner,
+                u,
+                v,
+                normal,
+            } => {
                 let p = corner + u * uniform(rng) + v * uniform(rng);
                 (p, cosine_hemisphere(rng, normal))
             }
@@ -193,7 +209,12 @@ fn bounding_sphere(scene: &Scene) -> (DVec3, f64) {
         points.extend([lo, hi]);
     }
     for r in &scene.receivers {
-        points.extend([r.corner, r.corner + r.u, r.corner + r.v, r.corner + r.u + r.v]);
+        points.extend([
+            r.corner,
+            r.corner + r.u,
+            r.corner + r.v,
+            r.corner + r.u + r.v,
+        ]);
     }
     let Some(first) = points.first().copied() else {
         return (DVec3::ZERO, 0.0);
@@ -206,7 +227,6 @@ fn bounding_sphere(scene: &Scene) -> (DVec3, f64) {
     let radius = ((hi - lo).length() * 0.5).max(1e-6);
     (center, radius)
 }
-
 
 #[cfg(test)]
 mod tests {
@@ -233,7 +253,10 @@ mod tests {
             * TAU
             * 100.0;
         let exact = light_flux_lm(&kind, 0.0);
-        assert!((numeric - exact).abs() < 1e-6 * exact, "{numeric} vs {exact}");
+        assert!(
+            (numeric - exact).abs() < 1e-6 * exact,
+            "{numeric} vs {exact}"
+        );
     }
 
     #[test]

@@ -91,8 +91,16 @@ impl<'a> Tracer<'a> {
                 grid
             })
             .collect();
-        let scene_scale = g.vertices.iter().map(|v| v.abs().max_element()).fold(f32::MIN_POSITIVE, f32::max);
-        let max_albedo = scene.materials.iter().map(|m| m.albedo()).fold(0.0, f64::max);
+        let scene_scale = g
+            .vertices
+            .iter()
+            .map(|v| v.abs().max_element())
+            .fold(f32::MIN_POSITIVE, f32::max);
+        let max_albedo = scene
+            .materials
+            .iter()
+            .map(|m| m.albedo())
+            .fold(0.0, f64::max);
         Tracer {
             caster,
             vertices: &g.vertices,
@@ -125,7 +133,9 @@ impl<'a> Tracer<'a> {
             for offset in 0..count {
                 let index = first + offset as u64;
                 let mut rng = photon_stream(self.seed, index);
-                let (o, d) = self.emitters.sample(self.emitters.light_of(index), &mut rng);
+                let (o, d) = self
+                    .emitters
+                    .sample(self.emitters.light_of(index), &mut rng);
                 scratch
                     .rays
                     .push(o.as_vec3().into(), d.as_vec3().into(), 0.0, f32::INFINITY);
@@ -180,8 +190,11 @@ impl<'a> Tracer<'a> {
                 continue;
             }
             let lobes = &self.lobes[self.triangle_material[tri as usize] as usize];
-            let Event::Scattered { dir: new_dir, transmitted, .. } =
-                scatter(lobes, dir, normal.as_dvec3(), &mut lane.rng)
+            let Event::Scattered {
+                dir: new_dir,
+                transmitted,
+                ..
+            } = scatter(lobes, dir, normal.as_dvec3(), &mut lane.rng)
             else {
                 tally.record_history_hits(lane.bounces + 1);
                 continue;
@@ -190,7 +203,11 @@ impl<'a> Tracer<'a> {
             // the origin offset is sized for.
             let [a, b, c] = self.triangles[tri as usize].map(|i| self.vertices[i as usize]);
             let p = a + (b - a) * hits.u[k] + (c - a) * hits.v[k];
-            let leave_side = if back_face != transmitted { -normal } else { normal };
+            let leave_side = if back_face != transmitted {
+                -normal
+            } else {
+                normal
+            };
             let o = offset_origin(p, leave_side, self.scene_scale);
             s.next_rays
                 .push(o.into(), new_dir.as_vec3().into(), 0.0, f32::INFINITY);
@@ -213,7 +230,11 @@ fn fold_histories(pending: &mut [(u32, u32, f64)], out: &mut Vec<HistoryScore>) 
                 h.score += score;
                 h.hits += 1;
             }
-            _ => out.push(HistoryScore { cell, hits: 1, score }),
+            _ => out.push(HistoryScore {
+                cell,
+                hits: 1,
+                score,
+            }),
         }
         last = Some((offset, cell));
     }

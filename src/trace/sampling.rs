@@ -85,7 +85,9 @@ mod tests {
         let mut rng = crate::rng::aux_stream(4);
         let n = DVec3::new(0.3, -0.5, 0.8).normalize();
         let k = 200_000;
-        let cosines: Vec<f64> = (0..k).map(|_| cosine_hemisphere(&mut rng, n).dot(n)).collect();
+        let cosines: Vec<f64> = (0..k)
+            .map(|_| cosine_hemisphere(&mut rng, n).dot(n))
+            .collect();
         assert!(cosines.iter().all(|c| *c >= 0.0));
         let mean = cosines.iter().sum::<f64>() / k as f64;
         // Var(cos) = 1/2 − 4/9 = 1/18 for the cosine-weighted distribution.

@@ -74,7 +74,11 @@ pub fn scatter(lobes: &Lobes, dir: DVec3, normal: DVec3, rng: &mut Pcg32) -> Eve
             specular: true,
         }
     } else if xi < lobes.dielectric {
-        let eta = if cos_in < 0.0 { 1.0 / lobes.ior } else { lobes.ior };
+        let eta = if cos_in < 0.0 {
+            1.0 / lobes.ior
+        } else {
+            lobes.ior
+        };
         match refract(dir, facing, eta) {
             Some((refracted, fresnel)) if uniform(rng) >= fresnel => Event::Scattered {
                 dir: refracted,

@@ -57,8 +57,15 @@ pub fn rms(z: &[f64]) -> f64 {
 pub fn assert_calibrated(z: &[f64], what: &str) {
     let r = rms(z);
     let worst = z.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    eprintln!("{what}: z RMS {r:.3}, worst {worst:.2} over {} cells", z.len());
-    assert!((0.85..=1.2).contains(&r), "{what}: z-score RMS {r:.3} over {} cells", z.len());
+    eprintln!(
+        "{what}: z RMS {r:.3}, worst {worst:.2} over {} cells",
+        z.len()
+    );
+    assert!(
+        (0.85..=1.2).contains(&r),
+        "{what}: z-score RMS {r:.3} over {} cells",
+        z.len()
+    );
     assert!(worst < 5.0, "{what}: a cell is {worst:.1}σ off");
 }
 
@@ -87,8 +94,18 @@ pub fn parallel_corner_factor(a: f64, b: f64, h: f64) -> f64 {
 /// Gauss–Legendre nodes and weights on [0, 1], 8 points: exact for the smooth integrands
 /// here to far below any σ.
 pub fn gauss8() -> [(f64, f64); 8] {
-    const X: [f64; 4] = [0.183_434_642_495_649_8, 0.525_532_409_916_329_0, 0.796_666_477_413_626_7, 0.960_289_856_497_536_3];
-    const W: [f64; 4] = [0.362_683_783_378_362_0, 0.313_706_645_877_887_3, 0.222_381_034_453_374_5, 0.101_228_536_290_376_3];
+    const X: [f64; 4] = [
+        0.183_434_642_495_649_8,
+        0.525_532_409_916_329_0,
+        0.796_666_477_413_626_7,
+        0.960_289_856_497_536_3,
+    ];
+    const W: [f64; 4] = [
+        0.362_683_783_378_362_0,
+        0.313_706_645_877_887_3,
+        0.222_381_034_453_374_5,
+        0.101_228_536_290_376_3,
+    ];
     let mut out = [(0.0, 0.0); 8];
     for k in 0..4 {
         out[2 * k] = (0.5 - 0.5 * X[k], 0.5 * W[k]);
