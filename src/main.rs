@@ -4,6 +4,7 @@ use clap::{Parser, Subcommand};
 use luxtally::accel::Backend;
 use luxtally::output::{summary, write_atomic};
 use luxtally::run::{run, Observer, RunOptions, RunState};
+use luxtally::scene::Estimator;
 use luxtally::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -75,6 +76,10 @@ struct RunArgs {
     /// Ray-casting backend: embree or obvhs.
     #[arg(long)]
     backend: Option<String>,
+    /// Scores every receiver with this estimator: track, next_event or auto
+    /// (default: each receiver's own `estimator`).
+    #[arg(long)]
+    estimator: Option<String>,
     /// No progress line.
     #[arg(long)]
     quiet: bool,
@@ -157,6 +162,19 @@ fn run_command(args: RunArgs) -> Result<()> {
     }
     if let Some(b) = &args.backend {
         options.backend = b.parse::<Backend>()?;
+    }
+    if let Some(e) = &args.estimator {
+        options.estimator = Some(match e.as_str() {
+            "track" => Estimator::Track,
+            "next_event" => Estimator::NextEvent,
+            "auto" => Estimator::Auto,
+            other => {
+                return Err(Error::input(
+                    "--estimator",
+                    format!("unknown estimator `{other}` (expected track, next_event or auto)"),
+                ))
+            }
+        });
     }
     let out = args
         .out

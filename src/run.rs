@@ -2,11 +2,12 @@
 //! forecast and checked against the stop criteria; everything traced is in the result.
 
 use crate::accel::{self, Backend, RayCaster};
-use crate::scene::Scene;
+use crate::scene::{Estimator, Scene};
 use crate::stats::forecast::{forecast, Forecast, HistoryPoint};
 use crate::stats::stop::{min_hits, receiver_target_error, StopReason, Target};
 use crate::stats::{map_stats, MapKind};
 use crate::tally::{ChunkTally, Tallies};
+use crate::trace::direct::direct_light;
 use crate::trace::{Scratch, Tracer, CHUNK_PHOTONS};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -29,6 +30,8 @@ pub struct RunOptions {
     pub seed: u64,
     pub threads: usize,
     pub backend: Backend,
+    /// Overrides every receiver's `estimator` (`--estimator`).
+    pub estimator: Option<Estimator>,
 }
 
 impl RunOptions {
@@ -45,6 +48,7 @@ impl RunOptions {
             seed: s.seed,
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             backend: Backend::Embree,
+            estimator: None,
         }
     }
 }
@@ -72,6 +76,13 @@ pub struct RunState<'a> {
     pub bounce_cap: u32,
     pub light_flux_lm: &'a [f64],
     pub threads: usize,
+    /// Per receiver: scored by next-event estimation (else by track).
+    pub next_event: &'a [bool],
+    /// Shadow rays and seconds spent on the receivers' deterministic direct light.
+    pub direct_rays: u64,
+    pub direct_s: f64,
+    /// Seconds spent on statistics, forecasts and stop checks (all epochs).
+    pub stats_s: f64,
     /// Set on the last epoch.
     pub stop_reason: Option<StopReason>,
 }
@@ -89,6 +100,10 @@ pub struct RunResult {
     pub light_flux_lm: Vec<f64>,
     pub bounce_cap: u32,
     pub threads: usize,
+    pub next_event: Vec<bool>,
+    pub direct_rays: u64,
+    pub direct_s: f64,
+    pub stats_s: f64,
 }
 
 impl RunResult {
@@ -107,6 +122,10 @@ impl RunResult {
             bounce_cap: self.bounce_cap,
             light_flux_lm: &self.light_flux_lm,
             threads: self.threads,
+            next_event: &self.next_event,
+            direct_rays: self.direct_rays,
+            direct_s: self.direct_s,
+            stats_s: self.stats_s,
             stop_reason: Some(self.stop_reason),
         }
     }
@@ -160,16 +179,6 @@ pub fn run_with(
             ));
         }
     }
-    if let Some(r) = scene
-        .receivers
-        .iter()
-        .find(|r| r.estimator == crate::scene::Estimator::NextEvent)
-    {
-        return Err(Error::Unsupported(format!(
-            "receiver `{}`: estimator = \"next_event\" is not implemented yet (use \"track\" or \"auto\")",
-            r.name
-        )));
-    }
     let open_ended = options.time_limit_s.is_none()
         && options.target_error.is_none()
         && options.min_hits.is_none();
@@ -185,9 +194,23 @@ pub fn run_with(
         .num_threads(threads)
         .build()
         .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
-    let tracer = Tracer::new(scene, caster, options.seed);
+    let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
     let total_flux_lm = tracer.emitters.total_flux_lm;
     let mut tallies = Tallies::new(scene.geometry.triangle_count(), tracer.cell_count());
+    let direct_start = Instant::now();
+    let mut direct_rays = 0;
+    for grid in tracer.receivers.iter().filter(|g| g.next_event) {
+        let first = grid.first_cell as usize;
+        let cells =
+            pool.install(|| direct_light(grid, &tracer.emitters, caster, tracer.receiver_slack));
+        for (sums, d) in tallies.cells[first..].iter_mut().zip(cells) {
+            (sums.direct, sums.direct_sigma) = (d.value, d.sigma);
+            direct_rays += d.rays;
+        }
+    }
+    let direct_s = direct_start.elapsed().as_secs_f64();
+    let next_event: Vec<bool> = tracer.receivers.iter().map(|g| g.next_event).collect();
+    let mut stats_s = 0.0;
     let mut history: Vec<HistoryPoint> = Vec::new();
     let mut latest_forecast = None;
     let setup_s = setup.elapsed().as_secs_f64();
@@ -219,6 +242,7 @@ pub fn run_with(
         }
         drop(results);
         let elapsed_s = start.elapsed().as_secs_f64();
+        let stats_start = Instant::now();
 
         let error = target_error(scene, &target, &tallies, total_flux_lm, options.absolute);
         let mut point = HistoryPoint {
@@ -256,6 +280,7 @@ pub fn run_with(
         } else {
             None
         };
+        stats_s += stats_start.elapsed().as_secs_f64();
         observer.epoch(&RunState {
             scene,
             options,
@@ -269,6 +294,10 @@ pub fn run_with(
             bounce_cap: tracer.max_bounces,
             light_flux_lm: &tracer.emitters.flux_lm,
             threads,
+            next_event: &next_event,
+            direct_rays,
+            direct_s,
+            stats_s,
             stop_reason: reason,
         });
         if let Some(reason) = reason {
@@ -310,6 +339,10 @@ pub fn run_with(
         light_flux_lm: tracer.emitters.flux_lm.clone(),
         bounce_cap: tracer.max_bounces,
         threads,
+        next_event,
+        direct_rays,
+        direct_s,
+        stats_s,
     })
 }
 

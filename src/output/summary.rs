@@ -1,7 +1,7 @@
 //! summary.json: every key of the contract, plus what a user needs to judge the run.
 
 use crate::run::RunState;
-use crate::scene::{Estimator, Quantity};
+use crate::scene::Quantity;
 use crate::stats::forecast::HistoryPoint;
 use crate::stats::{
     figure_of_merit, map_stats, mean_illuminance_sigma_lx, mean_illuminance_vov, receiver_stats,
@@ -28,6 +28,14 @@ pub struct Summary {
     pub target: String,
     pub bounce_cap: u32,
     pub photons_killed_by_bounce_cap: u64,
+    /// Shadow rays and seconds of the next-event receivers' deterministic direct light
+    /// (computed once, before the photons).
+    pub direct_rays: u64,
+    pub direct_s: f64,
+    /// Seconds of statistics, forecasts and stop checks over all epochs, and their
+    /// share of `elapsed_s`.
+    pub stats_s: f64,
+    pub stats_share: f64,
     pub receivers: BTreeMap<String, ReceiverSummary>,
     pub global: GlobalSummary,
     /// How far the target's error can be trusted (FOM, its stability, VOV).
@@ -46,7 +54,12 @@ pub struct LightSummary {
 pub struct ReceiverSummary {
     pub quantity: &'static str,
     pub unit: &'static str,
+    /// `track` or `next_event` (what `auto` resolved to).
     pub estimator: &'static str,
+    /// The deterministic direct part of `values` (0 for track receivers) and the
+    /// largest residual error of its quadrature, in the receiver's unit.
+    pub direct: Vec<f64>,
+    pub direct_sigma_max: f64,
     pub cells: [u32; 2],
     /// Index j * cells[0] + i.
     pub values: Vec<f64>,
@@ -88,7 +101,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
     let t = state.tallies;
     let mut receivers = BTreeMap::new();
     let mut first = 0usize;
-    for r in &scene.receivers {
+    for (r, &next_event) in scene.receivers.iter().zip(state.next_event) {
         let cells = &t.cells[first..first + r.cell_count()];
         first += r.cell_count();
         let stats = receiver_stats(cells, t.photons);
@@ -106,7 +119,9 @@ pub fn build(state: &RunState<'_>) -> Summary {
             ReceiverSummary {
                 quantity,
                 unit,
-                estimator: estimator_name(r.estimator),
+                estimator: if next_event { "next_event" } else { "track" },
+                direct: cells.iter().map(|c| c.direct).collect(),
+                direct_sigma_max: cells.iter().map(|c| c.direct_sigma).fold(0.0, f64::max),
                 cells: r.cells,
                 values: stats.values,
                 sigma: stats.sigma,
@@ -144,6 +159,14 @@ pub fn build(state: &RunState<'_>) -> Summary {
         target: state.target.describe(&scene.receivers),
         bounce_cap: state.bounce_cap,
         photons_killed_by_bounce_cap: t.killed_by_bounce_cap,
+        direct_rays: state.direct_rays,
+        direct_s: state.direct_s,
+        stats_s: state.stats_s,
+        stats_share: if state.elapsed_s > 0.0 {
+            state.stats_s / state.elapsed_s
+        } else {
+            0.0
+        },
         receivers,
         global: GlobalSummary {
             triangles: g.triangle_count(),
@@ -186,14 +209,5 @@ fn target_vov(state: &RunState<'_>) -> f64 {
                 .reduce(f64::max)
                 .unwrap_or(1.0)
         }
-    }
-}
-
-/// The estimator a receiver is scored with in this build: `auto` resolves to `track`
-/// until next-event estimation exists.
-fn estimator_name(e: Estimator) -> &'static str {
-    match e {
-        Estimator::Track | Estimator::Auto => "track",
-        Estimator::NextEvent => "next_event",
     }
 }

@@ -97,13 +97,15 @@ pub struct ReceiverStats {
     pub rms_sigma: f64,
 }
 
-/// Per-cell statistics of the cells `cells` of a run with `photons` histories.
+/// Per-cell statistics of the cells `cells` of a run with `photons` histories: the
+/// photons' estimate (eqs. 6–7) plus the deterministic direct light, errors combined.
 pub fn receiver_stats(cells: &[CellSums], photons: u64) -> ReceiverStats {
     let mut s = ReceiverStats::default();
     for c in cells {
         let (value, sigma) = cell_estimate(c.sum(), c.sum_sq(), photons);
-        s.values.push(value);
-        s.sigma.push(sigma);
+        // The deterministic direct part's residual is independent of the photons' noise.
+        s.values.push(value + c.direct);
+        s.sigma.push(sigma.hypot(c.direct_sigma));
         s.hits.push(c.hits);
     }
     (s.mean, s.rel_error) = mean_error(&s.values, &s.sigma);

@@ -7,7 +7,7 @@
 
 mod receiver;
 
-pub use receiver::{Crossing, ReceiverGrid};
+pub use receiver::{Connection, Crossing, ReceiverGrid};
 
 /// What one fixed range of photons scored.
 #[derive(Clone, Debug, Default)]
@@ -87,12 +87,16 @@ impl CompensatedSum {
     }
 }
 
-/// Per-cell moments of the history scores.
+/// Per-cell moments of the history scores, and the cell's deterministic direct light.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CellSums {
     /// Σx, Σx², Σx³, Σx⁴.
     pub moments: [CompensatedSum; 4],
     pub hits: u64,
+    /// Direct light computed deterministically (next-event receivers; 0 otherwise), in
+    /// the receiver's unit, and the residual error of its quadrature.
+    pub direct: f64,
+    pub direct_sigma: f64,
 }
 
 impl CellSums {

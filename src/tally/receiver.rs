@@ -1,7 +1,11 @@
-//! Receiver geometry: which cell a ray segment crosses, and what it scores there.
+//! Receiver geometry: which cell a ray segment crosses, what light arriving in a given
+//! direction is worth to the receiver's quantity, and points on the receiver for
+//! next-event estimation and deterministic direct light.
 
 use crate::scene::{Quantity, Receiver};
+use crate::trace::sampling::{uniform, uniform_cone};
 use glam::DVec3;
+use rand_pcg::Pcg32;
 use std::f64::consts::TAU;
 
 /// A receiver prepared for scoring, in the scene's local frame.
@@ -9,16 +13,22 @@ use std::f64::consts::TAU;
 pub struct ReceiverGrid {
     pub name: String,
     corner: DVec3,
+    u: DVec3,
+    v: DVec3,
     /// Unit normal u × v / |u × v|: the illuminated face for illuminance.
-    normal: DVec3,
+    pub normal: DVec3,
     /// Dual vectors: (p − corner)·du and ·dv are p's coordinates along u and v in [0, 1).
     du: DVec3,
     dv: DVec3,
     pub cells: [u32; 2],
+    pub area_m2: f64,
     pub cell_area_m2: f64,
     kind: Kind,
     /// Index of this receiver's first cell among all receivers' cells.
     pub first_cell: u32,
+    /// Scored by next-event estimation (and deterministic direct light) rather than by
+    /// the photons that cross it.
+    pub next_event: bool,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -30,6 +40,18 @@ enum Kind {
         cos_half_angle: f64,
         solid_angle_sr: f64,
     },
+}
+
+/// A next-event connection to a receiver (see [`ReceiverGrid::connect`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Connection {
+    pub point: DVec3,
+    pub cell: u32,
+    /// Unit direction from the vertex to `point`, and the distance.
+    pub dir: DVec3,
+    pub distance: f64,
+    /// Score per candela of the vertex's intensity along `dir`.
+    pub factor: f64,
 }
 
 /// A segment's crossing of a receiver cell.
@@ -44,7 +66,7 @@ pub struct Crossing {
 
 impl ReceiverGrid {
     /// Prepares `r` for a frame whose origin is at world position `origin`.
-    pub fn new(r: &Receiver, origin: DVec3, first_cell: u32) -> ReceiverGrid {
+    pub fn new(r: &Receiver, origin: DVec3, first_cell: u32, next_event: bool) -> ReceiverGrid {
         let cross = r.u.cross(r.v);
         let area = cross.length();
         let normal = cross / area;
@@ -65,13 +87,17 @@ impl ReceiverGrid {
         ReceiverGrid {
             name: r.name.clone(),
             corner: r.corner - origin,
+            u: r.u,
+            v: r.v,
             normal,
             du: r.v.cross(normal) / area,
             dv: normal.cross(r.u) / area,
             cells: r.cells,
+            area_m2: area,
             cell_area_m2: area / (r.cells[0] as f64 * r.cells[1] as f64),
             kind,
             first_cell,
+            next_event,
         }
     }
 
@@ -79,30 +105,33 @@ impl ReceiverGrid {
         self.cells[0] as usize * self.cells[1] as usize
     }
 
-    /// The cell the segment `origin + t·dir`, `0 < t ≤ t_max` (`dir` unit), crosses and
-    /// its score, if it scores: illuminance counts light arriving on the front face,
-    /// luminance light travelling towards the meter within its cone.
+    /// What light travelling in unit direction `dir` is worth at the receiver, per unit
+    /// of intensity over squared distance (cd/m² → the receiver's unit): cos θ on the
+    /// front face for illuminance, 1/Ω inside the meter's cone for luminance (the meter
+    /// reads the mean luminance over its cone). `None` when it does not count.
     #[inline]
-    pub fn crossing(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<Crossing> {
-        let cos_n = dir.dot(self.normal);
-        let weight = match self.kind {
+    pub fn arrival_factor(&self, dir: DVec3) -> Option<f64> {
+        match self.kind {
             Kind::Illuminance => {
-                if cos_n >= 0.0 {
-                    return None;
-                }
-                1.0
+                let cos = -dir.dot(self.normal);
+                (cos > 0.0).then_some(cos)
             }
             Kind::Luminance {
                 towards_meter,
                 cos_half_angle,
                 solid_angle_sr,
-            } => {
-                if dir.dot(towards_meter) < cos_half_angle || cos_n == 0.0 {
-                    return None;
-                }
-                1.0 / (cos_n.abs() * solid_angle_sr)
-            }
-        };
+            } => (dir.dot(towards_meter) >= cos_half_angle && dir.dot(self.normal) != 0.0)
+                .then(|| 1.0 / solid_angle_sr),
+        }
+    }
+
+    /// The cell the segment `origin + t·dir`, `0 < t ≤ t_max` (`dir` unit), crosses and
+    /// its score, if it scores. A crossing photon carries flux, not intensity: its score
+    /// is the arrival factor over |cos θ| per cell area.
+    #[inline]
+    pub fn crossing(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<Crossing> {
+        let factor = self.arrival_factor(dir)?;
+        let cos_n = dir.dot(self.normal);
         let t = (self.corner - origin).dot(self.normal) / cos_n;
         if !(t > 0.0 && t <= t_max) {
             return None;
@@ -112,12 +141,76 @@ impl ReceiverGrid {
         if !(0.0..1.0).contains(&a) || !(0.0..1.0).contains(&b) {
             return None;
         }
+        Some(Crossing {
+            cell: self.cell_at(a, b),
+            score_per_lm: factor / (cos_n.abs() * self.cell_area_m2),
+        })
+    }
+
+    /// A next-event connection from a scattering vertex at `x`: a point of the receiver,
+    /// its cell, and the factor that turns the vertex's intensity towards it (cd) into
+    /// the cell's score. Illuminance samples the point uniformly over the receiver
+    /// (factor = K·cos θ_r/d², K cells); luminance samples the direction uniformly in the
+    /// meter's cone and follows it to the receiver (factor = 1/(A_cell·|cos θ_r|)), so
+    /// every vertex a meter can see contributes, however close the meter is to it.
+    #[inline]
+    pub fn connect(&self, x: DVec3, rng: &mut Pcg32) -> Option<Connection> {
+        match self.kind {
+            Kind::Illuminance => {
+                let (a, b) = (uniform(rng), uniform(rng));
+                let point = self.point_at(a, b);
+                let d = point - x;
+                let distance = d.length();
+                let dir = d / distance;
+                let cos = self.arrival_factor(dir)?;
+                Some(Connection {
+                    point,
+                    cell: self.cell_at(a, b),
+                    dir,
+                    distance,
+                    factor: self.cell_count() as f64 * cos / (distance * distance),
+                })
+            }
+            Kind::Luminance {
+                towards_meter,
+                cos_half_angle,
+                ..
+            } => {
+                let dir = uniform_cone(rng, towards_meter, cos_half_angle);
+                let cos_n = dir.dot(self.normal);
+                let distance = (self.corner - x).dot(self.normal) / cos_n;
+                if !(distance > 0.0) {
+                    return None;
+                }
+                let point = x + dir * distance;
+                let rel = point - self.corner;
+                let (a, b) = (rel.dot(self.du), rel.dot(self.dv));
+                if !(0.0..1.0).contains(&a) || !(0.0..1.0).contains(&b) {
+                    return None;
+                }
+                Some(Connection {
+                    point,
+                    cell: self.cell_at(a, b),
+                    dir,
+                    distance,
+                    factor: 1.0 / (self.cell_area_m2 * cos_n.abs()),
+                })
+            }
+        }
+    }
+
+    /// The global index of the cell at receiver coordinates (a, b) ∈ [0, 1)².
+    #[inline]
+    pub fn cell_at(&self, a: f64, b: f64) -> u32 {
         let i = ((a * self.cells[0] as f64) as u32).min(self.cells[0] - 1);
         let j = ((b * self.cells[1] as f64) as u32).min(self.cells[1] - 1);
-        Some(Crossing {
-            cell: self.first_cell + j * self.cells[0] + i,
-            score_per_lm: weight / self.cell_area_m2,
-        })
+        self.first_cell + j * self.cells[0] + i
+    }
+
+    /// The local-frame point at receiver coordinates (a, b).
+    #[inline]
+    pub fn point_at(&self, a: f64, b: f64) -> DVec3 {
+        self.corner + self.u * a + self.v * b
     }
 }
 
@@ -140,7 +233,7 @@ mod tests {
 
     #[test]
     fn downward_ray_scores_in_the_cell_below_it() {
-        let g = ReceiverGrid::new(&desk(), DVec3::new(1.0, 1.0, 0.0), 10);
+        let g = ReceiverGrid::new(&desk(), DVec3::new(1.0, 1.0, 0.0), 10, false);
         // World (2.6, 2.7) → a = 0.8, b = 0.7 → cell (3, 1).
         let o = DVec3::new(1.6, 1.7, 3.0);
         let c = g.crossing(o, -DVec3::Z, 10.0).unwrap();
@@ -154,5 +247,7 @@ mod tests {
             g.crossing(o - DVec3::Z * 4.0, DVec3::Z, 10.0).is_none(),
             "back face"
         );
+        assert_eq!(g.cell_at(0.8, 0.7), c.cell);
+        assert_eq!(g.point_at(0.8, 0.7), DVec3::new(1.6, 1.7, 0.5));
     }
 }

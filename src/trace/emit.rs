@@ -83,6 +83,10 @@ pub fn light_flux_lm(kind: &LightKind, scene_radius: f64) -> f64 {
 pub struct Emitters {
     pub emitters: Vec<Emitter>,
     pub flux_lm: Vec<f64>,
+    /// The amount the deterministic direct light scales with: intensity (cd) of point
+    /// and spot sources, illuminance (lx) of directional ones, luminance (cd/m²) of
+    /// area sources.
+    pub intensity_scale: Vec<f64>,
     pub total_flux_lm: f64,
     cdf: Vec<f64>,
 }
@@ -95,8 +99,16 @@ impl Emitters {
         let (center, radius) = bounding_sphere(scene);
         let mut emitters = Vec::new();
         let mut flux_lm = Vec::new();
+        let mut intensity_scale = Vec::new();
         for light in &scene.lights {
             flux_lm.push(light_flux_lm(&light.kind, radius));
+            intensity_scale.push(match light.kind {
+                LightKind::Point { intensity_cd, .. } | LightKind::Spot { intensity_cd, .. } => {
+                    intensity_cd
+                }
+                LightKind::Directional { illuminance_lx, .. } => illuminance_lx,
+                LightKind::Area { luminance_cdm2, .. } => luminance_cdm2,
+            });
             emitters.push(match light.kind {
                 LightKind::Point { position, .. } => Emitter::Point {
                     position: position - origin,
@@ -146,6 +158,7 @@ impl Emitters {
         Emitters {
             emitters,
             flux_lm,
+            intensity_scale,
             total_flux_lm,
             cdf,
         }

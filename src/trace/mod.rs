@@ -1,15 +1,24 @@
 //! The photon pass: photons emitted from the lights travel in SoA batches, one bounce
 //! per step for the whole batch, through the backend's batched ray calls:
-//! emit → intersect → score receivers → deposit on triangles → scatter or absorb →
-//! compact survivors → repeat.
+//! emit → intersect → score receivers → deposit on triangles → connect diffuse vertices
+//! to next-event receivers → scatter or absorb → shadow rays → compact survivors →
+//! repeat.
+//!
+//! Receivers are scored in one of two ways, never both for the same path:
+//! - *track* (analog): a segment scores the cell it crosses;
+//! - *next event*: direct light is deterministic ([`direct`]); every diffuse vertex of
+//!   every history sends one shadow ray to a uniformly sampled point of the receiver and
+//!   scores its expected contribution there; only segments that leave a specular
+//!   interaction (mirror, glass: not connectable) still score by crossing.
 
+pub mod direct;
 pub mod emit;
 pub mod sampling;
 pub mod scatter;
 
 use crate::accel::{HitBatch, RayBatch, RayCaster, NO_HIT};
 use crate::rng::photon_stream;
-use crate::scene::Scene;
+use crate::scene::{Estimator, Scene};
 use crate::tally::{deposit_code, ChunkTally, HistoryScore, ReceiverGrid};
 use emit::Emitters;
 use glam::{DVec3, Vec3};
@@ -43,6 +52,8 @@ pub struct Tracer<'a> {
     normals: &'a [Vec3],
     /// Lobes per triangle's material, looked up through `triangle_material`.
     lobes: Vec<Lobes>,
+    /// Diffuse reflectance and transmittance per material (next-event weights).
+    diffuse: Vec<(f64, f64)>,
     triangle_material: &'a [u32],
     pub emitters: Emitters,
     pub receivers: Vec<ReceiverGrid>,
@@ -52,7 +63,7 @@ pub struct Tracer<'a> {
     scene_scale: f32,
     /// How far past a hit a receiver still counts as on the surface hit (m): 10 ppm of
     /// the scene's size, well above f32 hit-distance errors.
-    receiver_slack: f64,
+    pub receiver_slack: f64,
 }
 
 /// Per-worker buffers, reused from chunk to chunk (their contents never affect results).
@@ -65,6 +76,10 @@ pub struct Scratch {
     next_lanes: Vec<Lane>,
     /// (photon offset in chunk, cell, score) before folding per history.
     pending: Vec<(u32, u32, f64)>,
+    /// Next-event shadow rays of this bounce and what each scores if unoccluded.
+    shadow_rays: RayBatch,
+    shadow_scores: Vec<(u32, u32, f64)>,
+    occluded: Vec<bool>,
 }
 
 /// A live photon's state besides its ray.
@@ -75,18 +90,37 @@ struct Lane {
     /// Surface hits so far (the first is direct light, the rest indirect).
     bounces: u32,
     odd: bool,
+    /// The current segment left a specular interaction (mirror, refraction).
+    after_specular: bool,
     rng: Pcg32,
 }
 
 impl<'a> Tracer<'a> {
-    pub fn new(scene: &'a Scene, caster: &'a dyn RayCaster, seed: u64) -> Tracer<'a> {
+    /// Prepares the scene; `estimator` overrides every receiver's own choice.
+    pub fn new(
+        scene: &'a Scene,
+        caster: &'a dyn RayCaster,
+        seed: u64,
+        estimator: Option<Estimator>,
+    ) -> Tracer<'a> {
         let g = &scene.geometry;
+        // Diffuse paths exist when some triangle has a diffuse lobe: then `auto`
+        // receivers are scored by next-event estimation.
+        let diffuse_paths = g.material.iter().any(|&m| {
+            scene.materials[m as usize].reflectance + scene.materials[m as usize].transmittance
+                > 0.0
+        });
         let mut first_cell = 0u32;
         let receivers = scene
             .receivers
             .iter()
             .map(|r| {
-                let grid = ReceiverGrid::new(r, g.origin, first_cell);
+                let next_event = match estimator.unwrap_or(r.estimator) {
+                    Estimator::Track => false,
+                    Estimator::NextEvent => true,
+                    Estimator::Auto => diffuse_paths,
+                };
+                let grid = ReceiverGrid::new(r, g.origin, first_cell, next_event);
                 first_cell += grid.cell_count() as u32;
                 grid
             })
@@ -107,6 +141,11 @@ impl<'a> Tracer<'a> {
             triangles: &g.triangles,
             normals: &g.normal,
             lobes: scene.materials.iter().map(Lobes::new).collect(),
+            diffuse: scene
+                .materials
+                .iter()
+                .map(|m| (m.reflectance, m.transmittance))
+                .collect(),
             triangle_material: &g.material,
             emitters: Emitters::new(scene),
             receivers,
@@ -143,6 +182,7 @@ impl<'a> Tracer<'a> {
                     offset,
                     bounces: 0,
                     odd: index % 2 == 1,
+                    after_specular: false,
                     rng,
                 });
             }
@@ -158,10 +198,12 @@ impl<'a> Tracer<'a> {
         tally
     }
 
-    /// One bounce of every live photon: score, deposit, scatter, compact.
+    /// One bounce of every live photon: score, deposit, connect, scatter, compact.
     fn step(&self, s: &mut Scratch, tally: &mut ChunkTally, flux: f64) {
         s.next_rays.clear();
         s.next_lanes.clear();
+        s.shadow_rays.clear();
+        s.shadow_scores.clear();
         let (rays, hits) = (&s.rays, &s.hits);
         for (k, lane) in s.lanes.iter_mut().enumerate() {
             let origin = DVec3::new(rays.ox[k] as f64, rays.oy[k] as f64, rays.oz[k] as f64);
@@ -171,6 +213,10 @@ impl<'a> Tracer<'a> {
             // photon: a receiver placed on a floor measures the floor's illuminance.
             let t_reach = hits.t[k] as f64 + self.receiver_slack;
             for r in &self.receivers {
+                // Next-event receivers take by crossing only what they cannot connect.
+                if r.next_event && !lane.after_specular {
+                    continue;
+                }
                 if let Some(c) = r.crossing(origin, dir, t_reach) {
                     s.pending.push((lane.offset, c.cell, c.score_per_lm * flux));
                 }
@@ -184,37 +230,104 @@ impl<'a> Tracer<'a> {
             tally
                 .deposits
                 .push(deposit_code(tri, back_face, lane.bounces > 0, lane.odd));
+            // Hit point from barycentrics: its error scales with the vertices, which
+            // the origin offset is sized for.
+            let [a, b, c] = self.triangles[tri as usize].map(|i| self.vertices[i as usize]);
+            let p = a + (b - a) * hits.u[k] + (c - a) * hits.v[k];
+            let facing = if back_face { -normal } else { normal };
+            let material = self.triangle_material[tri as usize] as usize;
+            let (rho, tau) = self.diffuse[material];
+            if rho + tau > 0.0 {
+                self.connect(
+                    p,
+                    facing,
+                    rho,
+                    tau,
+                    lane,
+                    flux,
+                    &mut s.shadow_rays,
+                    &mut s.shadow_scores,
+                );
+            }
             if lane.bounces >= self.max_bounces {
                 tally.killed_by_bounce_cap += 1;
                 tally.record_history_hits(lane.bounces + 1);
                 continue;
             }
-            let lobes = &self.lobes[self.triangle_material[tri as usize] as usize];
             let Event::Scattered {
                 dir: new_dir,
                 transmitted,
-                ..
-            } = scatter(lobes, dir, normal.as_dvec3(), &mut lane.rng)
+                specular,
+            } = scatter(&self.lobes[material], dir, normal.as_dvec3(), &mut lane.rng)
             else {
                 tally.record_history_hits(lane.bounces + 1);
                 continue;
             };
-            // Hit point from barycentrics: its error scales with the vertices, which
-            // the origin offset is sized for.
-            let [a, b, c] = self.triangles[tri as usize].map(|i| self.vertices[i as usize]);
-            let p = a + (b - a) * hits.u[k] + (c - a) * hits.v[k];
-            let leave_side = if back_face != transmitted {
-                -normal
-            } else {
-                normal
-            };
-            let o = offset_origin(p, leave_side, self.scene_scale);
+            let o = offset_origin(
+                p,
+                if transmitted { -facing } else { facing },
+                self.scene_scale,
+            );
             s.next_rays
                 .push(o.into(), new_dir.as_vec3().into(), 0.0, f32::INFINITY);
             s.next_lanes.push(Lane {
                 bounces: lane.bounces + 1,
+                after_specular: specular,
                 ..lane.clone()
             });
+        }
+        if !s.shadow_rays.is_empty() {
+            self.caster.occluded(&s.shadow_rays, &mut s.occluded);
+            tally.rays += s.shadow_rays.len() as u64;
+            for (score, blocked) in s.shadow_scores.iter().zip(&s.occluded) {
+                if !blocked {
+                    s.pending.push(*score);
+                }
+            }
+        }
+    }
+
+    /// Next-event estimation from a diffuse vertex at `p` (side `facing` towards the
+    /// incoming photon; diffuse reflectance `rho` on that side, transmittance `tau` on
+    /// the other) to every next-event receiver: one sampled receiver point
+    /// ([`ReceiverGrid::connect`]) and its expected score, w·f·cos θ_s/π times the
+    /// connection's factor, queued behind a shadow ray. It does not depend on what the
+    /// roulette then picks.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn connect(
+        &self,
+        p: Vec3,
+        facing: Vec3,
+        rho: f64,
+        tau: f64,
+        lane: &mut Lane,
+        flux: f64,
+        shadow_rays: &mut RayBatch,
+        shadow_scores: &mut Vec<(u32, u32, f64)>,
+    ) {
+        for r in self.receivers.iter().filter(|r| r.next_event) {
+            let Some(c) = r.connect(p.as_dvec3(), &mut lane.rng) else {
+                continue;
+            };
+            let cos_s = c.dir.dot(facing.as_dvec3());
+            let (coefficient, side) = if cos_s > 0.0 {
+                (rho, facing)
+            } else {
+                (tau, -facing)
+            };
+            if coefficient <= 0.0 {
+                continue;
+            }
+            // Lambertian intensity of the scattered photon towards the receiver point.
+            let intensity = flux * coefficient * cos_s.abs() * std::f64::consts::FRAC_1_PI;
+            let score = intensity * c.factor;
+            let o = offset_origin(p, side, self.scene_scale);
+            let to_q = (c.point - o.as_dvec3()).as_vec3();
+            // Stop just short of the receiver point, which may lie on a surface.
+            let t_far = (1.0 - (2.0 * self.receiver_slack / c.distance) as f32).max(0.5);
+            shadow_rays.push(o.into(), to_q.into(), 0.0, t_far);
+            shadow_scores.push((lane.offset, c.cell, score));
         }
     }
 }
