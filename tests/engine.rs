@@ -224,3 +224,54 @@ fn receiver_no_photon_reaches_reads_zero_with_unknown_error() {
     assert_eq!(r.rel_error.arithmetic, luxtally::stats::REL_ERROR_UNKNOWN);
     assert_all_finite(&s);
 }
+
+#[test]
+fn track_and_next_event_agree_on_every_office_desk_cell() {
+    // The cross-check that no path is missed or counted twice: the analog estimator
+    // and next-event estimation with deterministic direct light, cell by cell.
+    let scene = office();
+    let with = |estimator, photons| luxtally::run::RunOptions {
+        estimator: Some(estimator),
+        ..options(&scene, photons, 2, Backend::Embree)
+    };
+    let track = run_options(&scene, &with(luxtally::scene::Estimator::Track, 10_000_000));
+    let next = run_options(&scene, &with(luxtally::scene::Estimator::NextEvent, 1_000_000));
+    let (a, b) = (&track.receivers["desk"], &next.receivers["desk"]);
+    assert_eq!((a.estimator, b.estimator), ("track", "next_event"));
+    let z: Vec<f64> = (0..a.values.len())
+        .map(|k| (a.values[k] - b.values[k]) / a.sigma[k].hypot(b.sigma[k]))
+        .collect();
+    let r = rms(&z);
+    eprintln!("track vs next_event: z RMS {r:.3} over {} cells", z.len());
+    assert!((0.8..=1.25).contains(&r), "z RMS {r}");
+}
+
+#[test]
+fn auto_estimator_picks_next_event_only_where_diffuse_paths_exist() {
+    let office = run_options(&office(), &options(&office(), 10_000, 2, Backend::Embree));
+    assert_eq!(office.receivers["desk"].estimator, "next_event");
+    let black = run_scene(
+        r#"
+        [materials.black]
+        reflectance = 0
+        [[objects]]
+        shape = "rect"
+        corner = [-1, -1, 0]
+        u = [2, 0, 0]
+        v = [0, 2, 0]
+        material = "black"
+        [[lights]]
+        type = "point"
+        position = [0, 0, 1]
+        intensity_cd = 10
+        [[receivers]]
+        name = "r"
+        corner = [-1, -1, 0.5]
+        u = [2, 0, 0]
+        v = [0, 2, 0]
+        cells = [2, 2]
+        "#,
+        10_000,
+    );
+    assert_eq!(black.receivers["r"].estimator, "track");
+}
