@@ -431,3 +431,200 @@ pub fn bench_rays(
     let _ = writeln!(out, "\nFigures in Mrays/s. {}.\n", builds.join("; "));
     Ok(out)
 }
+
+/// A scene for photon benchmarks over `geometry`: one grey Lambertian material
+/// (ρ = 0.5) on every triangle and a point light at the centre of the bounds' top tenth.
+pub fn lit_scene(name: &str, mut geometry: Geometry) -> crate::scene::Scene {
+    use crate::scene::{Light, LightKind, Material, Scene};
+    geometry.material.iter_mut().for_each(|m| *m = 0);
+    let (lo, hi) = geometry.world_bounds().unwrap_or((DVec3::ZERO, DVec3::ONE));
+    let position = DVec3::new(
+        (lo.x + hi.x) / 2.0,
+        (lo.y + hi.y) / 2.0,
+        hi.z - 0.1 * (hi.z - lo.z),
+    );
+    Scene {
+        name: name.to_string(),
+        materials: vec![Material::lambertian("grey", 0.5)],
+        geometry,
+        lights: vec![Light {
+            label: "lights[0]".into(),
+            kind: LightKind::Point {
+                position,
+                intensity_cd: 1000.0,
+            },
+        }],
+        ..Scene::default()
+    }
+}
+
+/// Photon-tracing throughput against raw ray casting on the same scene and backend:
+/// closest-hit rays per second of the photon pass (track estimator, so every ray is a
+/// closest-hit ray) over the backend's rays per second on incoherent random rays through
+/// the same API, both wall time on 1 and on `threads` threads. Returns a Markdown table.
+pub fn bench_photons(
+    scene: &crate::scene::Scene,
+    photons: u64,
+    threads: usize,
+    backend: crate::accel::Backend,
+) -> Result<String> {
+    use crate::run::{run, RunOptions};
+    use crate::scene::Estimator;
+    use std::sync::atomic::AtomicBool;
+    let caster = crate::accel::build(backend, &scene.geometry)?;
+    let (lo, hi) = local_bounds(&scene.geometry);
+    let chunks = split(&random_rays(lo, hi, 500_000, 7), CHUNK);
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "### {}: {} triangles, {} backend\n",
+        scene.name,
+        scene.geometry.triangle_count(),
+        backend.name()
+    );
+    let _ = writeln!(
+        out,
+        "| threads | raw Mrays/s | photon pass Mrays/s | photons/s | ratio |"
+    );
+    let _ = writeln!(out, "|---:|---:|---:|---:|---:|");
+    for t in [1, threads.max(1)] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build()
+            .map_err(|e| Error::Unsupported(format!("cannot start {t} threads: {e}")))?;
+        let raw = rust_mrays(
+            caster.as_ref(),
+            caster.default_intersect_api(),
+            &chunks,
+            false,
+            Some(&pool),
+            3,
+        );
+        let options = RunOptions {
+            photons: Some(photons),
+            threads: t,
+            backend,
+            estimator: Some(Estimator::Track),
+            ..RunOptions::from_scene(scene)
+        };
+        let result = run(scene, &options, &AtomicBool::new(false), &mut ())?;
+        let traced = result.tallies.rays as f64 / result.elapsed_s / 1e6;
+        let _ = writeln!(
+            out,
+            "| {t} | {raw:.2} | {traced:.2} | {:.2} M | {:.2} |",
+            result.tallies.photons as f64 / result.elapsed_s / 1e6,
+            traced / raw
+        );
+    }
+    Ok(out)
+}
+
+/// Time to accuracy on a receiver: runs `scene` until `target` relative error (eq. 9,
+/// quadratic) on `receiver:NAME` or `time_limit_s`, and reports the error-versus-time
+/// history with the forecasts made along the way, the times to 5, 2 and 1 %, the FOM,
+/// the forecast made once 10 % of the photons were traced against what the run needed,
+/// and the share of run time spent on statistics and forecasts.
+pub fn bench_accuracy(
+    scene: &crate::scene::Scene,
+    receiver: &str,
+    estimator: Option<crate::scene::Estimator>,
+    target: f64,
+    time_limit_s: f64,
+    threads: usize,
+) -> Result<String> {
+    use crate::run::{run, RunOptions};
+    use std::sync::atomic::AtomicBool;
+    let options = RunOptions {
+        photons: None,
+        time_limit_s: Some(time_limit_s),
+        target_error: Some(target),
+        target: Some(format!("receiver:{receiver}")),
+        absolute: false,
+        min_hits: None,
+        threads,
+        estimator,
+        ..RunOptions::from_scene(scene)
+    };
+    let result = run(scene, &options, &AtomicBool::new(false), &mut ())?;
+    let state = result.state(scene, &options);
+    let summary = crate::output::summary::build(&state);
+    let r = summary
+        .receivers
+        .get(receiver)
+        .ok_or_else(|| Error::input("--receiver", format!("no receiver named `{receiver}`")))?;
+    let h = &result.history;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "### {} / {receiver} ({} estimator, target {:.1} %)\n",
+        scene.name,
+        r.estimator,
+        100.0 * target
+    );
+    let _ = writeln!(
+        out,
+        "Stopped on {} after {:.3} s, {} photons, {} rays; direct light {:.3} s ({} shadow rays); statistics and forecasts {:.4} s = {:.3} % of the run; FOM {:.0} (stable: {}), VOV {:.4}.\n",
+        result.stop_reason.as_str(),
+        result.elapsed_s,
+        result.tallies.photons,
+        result.tallies.rays,
+        result.direct_s,
+        result.direct_rays,
+        result.stats_s,
+        100.0 * result.stats_s / result.elapsed_s.max(1e-9),
+        summary.reliability.fom,
+        summary.reliability.fom_stable,
+        summary.reliability.vov,
+    );
+    let mut reached = Vec::new();
+    for goal in [0.05, 0.02, 0.01] {
+        let at = h.iter().find(|p| p.rel_error <= goal);
+        reached.push(match at {
+            Some(p) => format!(
+                "{:.0} %: {:.3} s ({} photons)",
+                100.0 * goal,
+                p.elapsed_s,
+                p.photons
+            ),
+            None => format!("{:.0} %: not reached", 100.0 * goal),
+        });
+    }
+    let _ = writeln!(out, "Time to accuracy: {}.\n", reached.join(", "));
+    if let (Some(last), Some(early)) = (
+        h.last(),
+        h.iter()
+            .find(|p| p.photons * 10 >= h.last().map_or(0, |l| l.photons)),
+    ) {
+        if let (Some(fs), Some(fp)) = (early.forecast_s, early.forecast_photons) {
+            let _ = writeln!(
+                out,
+                "Forecast made at {:.1} % of the photons ({:.3} s): {:.3} s and {} photons; actual {:.3} s and {} photons: time {:+.2} %, photons {:+.2} %.\n",
+                100.0 * early.photons as f64 / last.photons as f64,
+                early.elapsed_s,
+                fs,
+                fp,
+                last.elapsed_s,
+                last.photons,
+                100.0 * (fs / last.elapsed_s - 1.0),
+                100.0 * (fp as f64 / last.photons as f64 - 1.0),
+            );
+        }
+    }
+    let _ = writeln!(
+        out,
+        "| elapsed s | photons | error % | forecast s | forecast photons |"
+    );
+    let _ = writeln!(out, "|---:|---:|---:|---:|---:|");
+    for p in h {
+        let _ = writeln!(
+            out,
+            "| {:.3} | {} | {:.3} | {} | {} |",
+            p.elapsed_s,
+            p.photons,
+            100.0 * p.rel_error,
+            p.forecast_s.map_or("–".into(), |f| format!("{f:.3}")),
+            p.forecast_photons.map_or("–".into(), |f| f.to_string()),
+        );
+    }
+    Ok(out)
+}

@@ -41,6 +41,34 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
     },
+    /// Photon-tracing throughput against raw ray casting on the same scene and backend.
+    /// SCENE `procedural` is a generated scene of 1,000,000 triangles.
+    BenchPhotons {
+        scene: PathBuf,
+        #[arg(long, default_value_t = 2_000_000)]
+        photons: u64,
+        #[arg(long)]
+        threads: Option<usize>,
+        #[arg(long, default_value = "embree")]
+        backend: String,
+    },
+    /// Time to accuracy on a receiver: error against time, measured and forecast, time
+    /// to 5, 2 and 1 %, FOM, forecast accuracy and the cost of the statistics.
+    BenchAccuracy {
+        scene: PathBuf,
+        /// The receiver (default: the scene's first).
+        #[arg(long)]
+        receiver: Option<String>,
+        #[arg(long, default_value_t = 0.01)]
+        target_error: f64,
+        #[arg(long, default_value_t = 300.0)]
+        time_limit: f64,
+        /// track, next_event or auto (default: the receiver's own).
+        #[arg(long)]
+        estimator: Option<String>,
+        #[arg(long)]
+        threads: Option<usize>,
+    },
 }
 
 #[derive(clap::Args)]
@@ -117,6 +145,60 @@ fn main() -> ExitCode {
             rays,
             threads,
         } => bench_rays_command(&scene, rays, threads),
+        Command::BenchPhotons {
+            scene,
+            photons,
+            threads,
+            backend,
+        } => (|| {
+            let scene = if scene.as_os_str() == "procedural" {
+                luxtally::bench::lit_scene(
+                    "procedural",
+                    luxtally::bench::procedural_geometry(1_000_000),
+                )
+            } else {
+                luxtally::scene::load(&scene)?
+            };
+            let table = luxtally::bench::bench_photons(
+                &scene,
+                photons,
+                threads.unwrap_or_else(all_cores),
+                backend.parse()?,
+            )?;
+            print!("{table}");
+            Ok(())
+        })(),
+        Command::BenchAccuracy {
+            scene,
+            receiver,
+            target_error,
+            time_limit,
+            estimator,
+            threads,
+        } => (|| {
+            let scene = luxtally::scene::load(&scene)?;
+            let receiver =
+                match receiver.or_else(|| scene.receivers.first().map(|r| r.name.clone())) {
+                    Some(r) => r,
+                    None => {
+                        return Err(Error::input(
+                            scene.path.display().to_string(),
+                            "the scene has no receiver",
+                        ))
+                    }
+                };
+            let estimator = estimator.as_deref().map(parse_estimator).transpose()?;
+            let report = luxtally::bench::bench_accuracy(
+                &scene,
+                &receiver,
+                estimator,
+                target_error,
+                time_limit,
+                threads.unwrap_or_else(all_cores),
+            )?;
+            print!("{report}");
+            Ok(())
+        })(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -164,17 +246,7 @@ fn run_command(args: RunArgs) -> Result<()> {
         options.backend = b.parse::<Backend>()?;
     }
     if let Some(e) = &args.estimator {
-        options.estimator = Some(match e.as_str() {
-            "track" => Estimator::Track,
-            "next_event" => Estimator::NextEvent,
-            "auto" => Estimator::Auto,
-            other => {
-                return Err(Error::input(
-                    "--estimator",
-                    format!("unknown estimator `{other}` (expected track, next_event or auto)"),
-                ))
-            }
-        });
+        options.estimator = Some(parse_estimator(e)?);
     }
     let out = args
         .out
@@ -344,4 +416,20 @@ fn bench_rays_command(path: &Path, rays: usize, threads: Option<usize>) -> Resul
     )?;
     print!("{table}");
     Ok(())
+}
+
+fn parse_estimator(name: &str) -> Result<Estimator> {
+    match name {
+        "track" => Ok(Estimator::Track),
+        "next_event" => Ok(Estimator::NextEvent),
+        "auto" => Ok(Estimator::Auto),
+        other => Err(Error::input(
+            "--estimator",
+            format!("unknown estimator `{other}` (expected track, next_event or auto)"),
+        )),
+    }
+}
+
+fn all_cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
 }

@@ -235,7 +235,10 @@ fn track_and_next_event_agree_on_every_office_desk_cell() {
         ..options(&scene, photons, 2, Backend::Embree)
     };
     let track = run_options(&scene, &with(luxtally::scene::Estimator::Track, 10_000_000));
-    let next = run_options(&scene, &with(luxtally::scene::Estimator::NextEvent, 1_000_000));
+    let next = run_options(
+        &scene,
+        &with(luxtally::scene::Estimator::NextEvent, 1_000_000),
+    );
     let (a, b) = (&track.receivers["desk"], &next.receivers["desk"]);
     assert_eq!((a.estimator, b.estimator), ("track", "next_event"));
     let z: Vec<f64> = (0..a.values.len())
