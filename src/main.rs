@@ -339,9 +339,17 @@ impl Observer for CliObserver {
                 .target_error
                 .map(|g| format!(" → {:.3}{unit}", g * scale))
                 .unwrap_or_default();
-            let eta = state
-                .forecast
-                .map(|f| format!(", done in ~{:.1} s", (f.total_s - state.elapsed_s).max(0.0)))
+            // The accuracy forecast when there is an error target, else the photon count.
+            let photons_rate = state.tallies.photons as f64 / state.elapsed_s.max(1e-9);
+            let remaining_s = match (state.forecast, state.options.photons) {
+                (Some(f), _) => Some(f.total_s - state.elapsed_s),
+                (None, Some(n)) => {
+                    Some(n.saturating_sub(state.tallies.photons) as f64 / photons_rate)
+                }
+                _ => None,
+            };
+            let eta = remaining_s
+                .map(|r| format!(", done in ~{:.1} s", r.max(0.0)))
                 .unwrap_or_default();
             eprint!(
                 "\r{:7.1} s  {:>12} photons  {:6.1} Mrays/s  {}: {:.3}{unit}{goal}{eta}    ",

@@ -20,10 +20,15 @@ fn write(name: &str, contents: &[u8]) -> PathBuf {
 }
 
 /// Loads `text` as a scene file and returns its error message, checked to be one line
-/// naming the file.
+/// naming the file; `luxtally run` on the same file must print that line and exit 1.
 fn error_of(text: &str) -> String {
     let path = write("scene.toml", text.as_bytes());
     let result = scene::load(&path);
+    let cli = std::process::Command::new(env!("CARGO_BIN_EXE_luxtally"))
+        .args(["run", path.to_str().unwrap(), "--quiet", "--out"])
+        .arg(temp_path("out"))
+        .output()
+        .expect("binary runs");
     let _ = std::fs::remove_file(&path);
     let message = match result {
         Ok(_) => panic!("scene loaded but should not have:\n{text}"),
@@ -31,6 +36,17 @@ fn error_of(text: &str) -> String {
     };
     eprintln!("{message}");
     assert!(!message.contains('\n'), "not one line: {message:?}");
+    let stderr = String::from_utf8_lossy(&cli.stderr);
+    assert_eq!(
+        cli.status.code(),
+        Some(1),
+        "exit code of `luxtally run`: {stderr}"
+    );
+    assert_eq!(
+        stderr.trim_end(),
+        format!("luxtally: {message}"),
+        "the CLI prints the message as one line"
+    );
     assert!(
         message.contains(&path.display().to_string()),
         "does not name the file: {message}"

@@ -186,20 +186,41 @@ fn obvhs_backend_without_the_feature_says_how_to_get_it() {
 fn ctrl_c_stops_at_an_epoch_boundary_with_complete_outputs() {
     let out_dir = temp_dir("interrupt");
     let mut child = Command::new(env!("CARGO_BIN_EXE_luxtally"))
-        .args(["run", "scenes/office.toml", "--photons", "100000000000", "--quiet", "--out", out_dir.to_str().unwrap()])
+        .args([
+            "run",
+            "scenes/office.toml",
+            "--photons",
+            "100000000000",
+            "--quiet",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ])
         .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("binary starts");
     std::thread::sleep(std::time::Duration::from_millis(1500));
-    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().expect("kill runs");
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
     assert!(status.success());
     let out = child.wait_with_output().expect("run ends");
-    assert!(out.status.success(), "exit {:?}: {}", out.status.code(), String::from_utf8_lossy(&out.stderr));
-    let s: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out_dir.join("summary.json")).unwrap()).unwrap();
+    assert!(
+        out.status.success(),
+        "exit {:?}: {}",
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("summary.json")).unwrap())
+            .unwrap();
     assert_eq!(s["stop_reason"], "interrupted");
     let photons = s["photons_emitted"].as_u64().unwrap();
     assert!(photons > 0 && photons < 100_000_000_000);
     // Everything traced is in the output: the last history point is the final state.
-    assert_eq!(s["history"].as_array().unwrap().last().unwrap()["photons"], photons);
+    assert_eq!(
+        s["history"].as_array().unwrap().last().unwrap()["photons"],
+        photons
+    );
     assert!(s["receivers"]["desk"]["mean"].as_f64().unwrap() > 0.0);
 }
