@@ -306,8 +306,13 @@ impl<'a> Tracer<'a> {
         shadow_rays: &mut RayBatch,
         shadow_scores: &mut Vec<(u32, u32, f64)>,
     ) {
-        for r in self.receivers.iter().filter(|r| r.next_event) {
-            let Some(c) = r.connect(p.as_dvec3(), &mut lane.rng) else {
+        for (r, stratum) in self
+            .receivers
+            .iter()
+            .filter(|r| r.next_event)
+            .flat_map(|r| (0..r.connections).map(move |s| (r, s)))
+        {
+            let Some(c) = r.connect(p.as_dvec3(), stratum, &mut lane.rng) else {
                 continue;
             };
             let cos_s = c.dir.dot(facing.as_dvec3());
@@ -321,7 +326,7 @@ impl<'a> Tracer<'a> {
             }
             // Lambertian intensity of the scattered photon towards the receiver point.
             let intensity = flux * coefficient * cos_s.abs() * std::f64::consts::FRAC_1_PI;
-            let score = intensity * c.factor;
+            let score = intensity * c.factor / r.connections as f64;
             let o = offset_origin(p, side, self.scene_scale);
             let to_q = (c.point - o.as_dvec3()).as_vec3();
             // Stop just short of the receiver point, which may lie on a surface.

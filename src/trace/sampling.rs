@@ -50,7 +50,14 @@ pub fn uniform_sphere(rng: &mut Pcg32) -> DVec3 {
 /// cone's solid angle.
 #[inline]
 pub fn uniform_cone(rng: &mut Pcg32, n: DVec3, cos_max: f64) -> DVec3 {
-    let cos_t = 1.0 - uniform(rng) * (1.0 - cos_max);
+    uniform_cone_band(rng, n, cos_max, 1.0)
+}
+
+/// A direction about `n` (unit), uniform over the solid angle of the band
+/// cos_lo ≤ cos θ ≤ cos_hi.
+#[inline]
+pub fn uniform_cone_band(rng: &mut Pcg32, n: DVec3, cos_lo: f64, cos_hi: f64) -> DVec3 {
+    let cos_t = cos_hi - uniform(rng) * (cos_hi - cos_lo);
     around(n, cos_t, std::f64::consts::TAU * uniform(rng))
 }
 
