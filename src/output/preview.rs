@@ -134,6 +134,8 @@ const BAR_W: usize = 16;
 const GLYPH_SCALE: usize = 2;
 const ADVANCE: usize = 4 * GLYPH_SCALE;
 const TICKS: usize = 5;
+/// From the bar's edge to its labels, past the 3 px tick marks.
+const LABEL_GAP: usize = 10;
 
 /// An RGB canvas: the image scaled up to ≥ 256 px wide, a colour bar 0 … `scale` and
 /// its labels (`scale · label_factor`, then `unit`).
@@ -162,7 +164,7 @@ fn false_colour(
         .collect();
     let label_w = labels.iter().map(|l| l.len()).max().unwrap_or(1) * ADVANCE;
     let bar_x = MARGIN + img_w + 12;
-    let width = bar_x + BAR_W + 6 + label_w.max(unit.len() * ADVANCE) + MARGIN;
+    let width = bar_x + BAR_W + LABEL_GAP + label_w.max(unit.len() * ADVANCE) + MARGIN;
     let height = top + bar_h + MARGIN + 5 * GLYPH_SCALE;
     let mut c = Canvas::new(width, height);
 
@@ -182,13 +184,13 @@ fn false_colour(
     c.text(bar_x, MARGIN, unit);
     for (t, label) in labels.iter().enumerate() {
         let y = top + (bar_h - 1) * (TICKS - 1 - t) / (TICKS - 1);
-        for x in 0..4 {
+        for x in 0..3 {
             c.set(bar_x + BAR_W + x, y, [0, 0, 0]);
         }
         let ty = y
             .saturating_sub(5 * GLYPH_SCALE / 2)
             .max(top.saturating_sub(2));
-        c.text(bar_x + BAR_W + 6, ty, label);
+        c.text(bar_x + BAR_W + LABEL_GAP, ty, label);
     }
     c.encode()
 }
