@@ -120,7 +120,7 @@ fn assert_report_renders(report: &Path, name: &str, receivers: usize) {
     let out = chromium(
         &[
             &format!("--screenshot={}", shot.display()),
-            "--window-size=1200,2000",
+            "--window-size=1200,2300",
             "--hide-scrollbars",
         ],
         &page,
