@@ -92,7 +92,7 @@ fn receiver_exr_holds_summary_numbers_rounded_to_f32() {
                     .channel_data
                     .list
                     .iter()
-                    .find(|ch| ch.name == Text::from(c))
+                    .find(|ch| ch.name == *c)
                     .unwrap_or_else(|| panic!("{name}: channel {c}"));
                 ch.sample_data.values_as_f32().collect()
             };

