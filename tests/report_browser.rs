@@ -4,8 +4,8 @@
 //! `data-chart` container), the page's error box must be empty and the console must
 //! show no uncaught error. Screenshots are saved as test artifacts in
 //! `<cargo target dir>/test-artifacts/` (`report.png`, `report_live.png`,
-//! `report_interrupted.png`). Skipped, with a message, where /usr/bin/chromium is absent
-//! (scripts/setup.sh installs it).
+//! `report_interrupted.png`, `report_edge.png`). Skipped, with a message, where
+//! /usr/bin/chromium is absent (scripts/setup.sh installs it).
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -230,4 +230,68 @@ fn reports_of_a_live_run_and_of_a_run_stopped_by_ctrl_c_render() {
     }
     assert_report_renders(&live, "report_live", 1);
     assert_report_renders(&report, "report_interrupted", 1);
+}
+
+#[test]
+fn report_of_dark_tall_and_luminance_receivers_renders() {
+    if chromium_missing() {
+        return;
+    }
+    let dir = temp_dir("edge");
+    // A receiver no photon reaches (nothing scored), a 1 × 600 strip, a luminance meter.
+    let scene = r#"
+name = "edge"
+[materials.floor]
+reflectance = 0.5
+[[objects]]
+shape = "rect"
+corner = [0, 0, 0]
+u = [4, 0, 0]
+v = [0, 4, 0]
+material = "floor"
+[[lights]]
+type = "point"
+position = [2, 2, 2]
+intensity_cd = 100
+[[receivers]]
+name = "dark"
+corner = [0, 0, 5]
+u = [1, 0, 0]
+v = [0, 1, 0]
+cells = [3, 2]
+[[receivers]]
+name = "tall strip"
+corner = [0, 2, 0.01]
+u = [0, 0.1, 0]
+v = [4, 0, 0]
+cells = [1, 600]
+[[receivers]]
+name = "lum"
+corner = [0, 0, 0.5]
+u = [4, 0, 0]
+v = [0, 4, 0]
+cells = [20, 20]
+quantity = "luminance"
+view_direction = [0, 0, -1]
+half_angle_deg = 10
+"#;
+    let path = dir.join("edge.toml");
+    std::fs::write(&path, scene).expect("scene written");
+    let out = Command::new(env!("CARGO_BIN_EXE_luxtally"))
+        .args([
+            "run",
+            path.to_str().unwrap(),
+            "--photons",
+            "300000",
+            "--quiet",
+        ])
+        .args(["--out", dir.join("out").to_str().unwrap()])
+        .output()
+        .expect("binary runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_report_renders(&dir.join("out/report.html"), "report_edge", 3);
 }

@@ -152,7 +152,8 @@ fn false_colour(
             "a receiver without cells has no image".into(),
         ));
     }
-    let s = 256usize.div_ceil(w).max(1);
+    // At least 256 px wide, but no taller than 2048 px for the sake of a tall receiver.
+    let s = 256usize.div_ceil(w).min((2048 / h).max(1)).max(1);
     let (img_w, img_h) = (w * s, h * s);
     let top = MARGIN + 5 * GLYPH_SCALE + 6;
     let bar_h = img_h.max(128);
@@ -182,7 +183,9 @@ fn false_colour(
         }
     }
     c.text(bar_x, MARGIN, unit);
-    for (t, label) in labels.iter().enumerate() {
+    // A scale of 0 (nothing scored) gets its one label.
+    let shown = if scale > 0.0 { TICKS } else { 1 };
+    for (t, label) in labels.iter().enumerate().take(shown) {
         let y = top + (bar_h - 1) * (TICKS - 1 - t) / (TICKS - 1);
         for x in 0..3 {
             c.set(bar_x + BAR_W + x, y, [0, 0, 0]);
