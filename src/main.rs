@@ -29,10 +29,10 @@ enum Command {
     Run(RunArgs),
     /// Print a scene's statistics: triangles, materials, lights, receivers, bounds.
     Info { scene: PathBuf },
-    /// Ray throughput of every backend and ray API on a scene (incoherent random rays),
-    /// with Embree's own C loop over the same rays for comparison.
     /// Rebuild report.html and the receivers' PNG previews from OUT_DIR/summary.json.
     Report { out_dir: PathBuf },
+    /// Ray throughput of every backend and ray API on a scene (incoherent random rays),
+    /// with Embree's own C loop over the same rays for comparison.
     BenchRays {
         scene: PathBuf,
         /// Rays per measurement.
