@@ -30,6 +30,8 @@ enum Command {
     Run(RunArgs),
     /// Print a scene's statistics: triangles, materials, lights, receivers, bounds.
     Info { scene: PathBuf },
+    /// Rebuild report.html and the receivers' PNG previews from OUT_DIR/summary.json.
+    Report { out_dir: PathBuf },
     /// Ray throughput of every backend and ray API on a scene (incoherent random rays),
     /// with Embree's own C loop over the same rays for comparison.
     BenchRays {
@@ -111,6 +113,9 @@ struct RunArgs {
     /// No progress line.
     #[arg(long)]
     quiet: bool,
+    /// Rewrite report.html every SECONDS during the run (the page reloads itself).
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
+    report_every: Option<f64>,
 }
 
 fn main() -> ExitCode {
@@ -140,6 +145,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run_command(args),
         Command::Info { scene } => info_command(&scene),
+        Command::Report { out_dir } => luxtally::output::rebuild_report(&out_dir),
         Command::BenchRays {
             scene,
             rays,
@@ -248,6 +254,14 @@ fn run_command(args: RunArgs) -> Result<()> {
     if let Some(e) = &args.estimator {
         options.estimator = Some(parse_estimator(e)?);
     }
+    if let Some(s) = args.report_every {
+        if !(s > 0.0 && s.is_finite()) {
+            return Err(Error::input(
+                "--report-every",
+                format!("{s} is not a positive number of seconds"),
+            ));
+        }
+    }
     let out = args
         .out
         .unwrap_or_else(|| Path::new("out").join(&scene.name));
@@ -268,6 +282,8 @@ fn run_command(args: RunArgs) -> Result<()> {
         out: out.clone(),
         last_save: Instant::now(),
         save_error: None,
+        report_every_s: args.report_every,
+        last_report: None,
     };
     let result = run(&scene, &options, &interrupt, &mut observer)?;
     if !args.quiet {
@@ -275,6 +291,7 @@ fn run_command(args: RunArgs) -> Result<()> {
     }
     let state = result.state(&scene, &options);
     save_summary(&out, &state)?;
+    luxtally::output::write_run_files(&out, &state)?;
     if let Some(e) = observer.save_error {
         return Err(e);
     }
@@ -323,6 +340,9 @@ struct CliObserver {
     out: PathBuf,
     last_save: Instant,
     save_error: Option<Error>,
+    /// `--report-every`: report.html is rewritten this often during the run.
+    report_every_s: Option<f64>,
+    last_report: Option<Instant>,
 }
 
 const SAVE_EVERY_S: f64 = 10.0;
@@ -365,6 +385,19 @@ impl Observer for CliObserver {
             self.last_save = Instant::now();
             if let Err(e) = save_summary(&self.out, state) {
                 self.save_error.get_or_insert(e);
+            }
+        }
+        if let Some(every) = self.report_every_s {
+            let due = self
+                .last_report
+                .is_none_or(|t| t.elapsed().as_secs_f64() >= every);
+            if state.stop_reason.is_none() && due {
+                self.last_report = Some(Instant::now());
+                let written = luxtally::output::summary_value(state)
+                    .and_then(|s| luxtally::output::write_live_report(&self.out, &s, every));
+                if let Err(e) = written {
+                    self.save_error.get_or_insert(e);
+                }
             }
         }
     }

@@ -26,6 +26,9 @@ pub struct Summary {
     pub total_flux_lm: f64,
     pub lights: Vec<LightSummary>,
     pub target: String,
+    /// `history[].rel_error` and the forecast's target are absolute (`--absolute`, in
+    /// the target's unit), not relative.
+    pub absolute_error: bool,
     pub bounce_cap: u32,
     pub photons_killed_by_bounce_cap: u64,
     /// Shadow rays and seconds of the next-event receivers' deterministic direct light
@@ -157,6 +160,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
             })
             .collect(),
         target: state.target.describe(&scene.receivers),
+        absolute_error: state.options.absolute,
         bounce_cap: state.bounce_cap,
         photons_killed_by_bounce_cap: t.killed_by_bounce_cap,
         direct_rays: state.direct_rays,

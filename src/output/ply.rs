@@ -1,0 +1,119 @@
+//! `scene_map.ply`: the scene's illuminance map as a binary little-endian PLY mesh that
+//! MeshLab, ParaView and Blender display as it is.
+//!
+//! Vertices: `x y z` (float: world metres, f64 rounded to f32), `illuminance` (float,
+//! lx: the area-weighted mean of the adjacent faces' total illuminance) and
+//! `red green blue` (uchar: viridis over 0 … the 99th percentile of the vertex
+//! illuminance, brighter vertices clipped to the top colour; the scale is repeated in a
+//! `comment` line). Faces: `vertex_indices` (list uchar int), `illuminance` (total, lx),
+//! `indirect` (lx) and `rel_error` (odd/even estimate |E_odd − E_even| / 2 / E, method.md
+//! §3; 1 when unknown), all float (f64 rounded to f32).
+
+use super::colormap::{normalise, viridis};
+use crate::run::RunState;
+use crate::stats::{triangle_illuminance_lx, MapKind, REL_ERROR_UNKNOWN};
+
+/// Per-face values of the map, f64.
+pub struct FaceMap {
+    pub illuminance_lx: Vec<f64>,
+    pub indirect_lx: Vec<f64>,
+    pub rel_error: Vec<f64>,
+}
+
+/// Total and indirect illuminance and odd/even error of every triangle.
+pub fn face_map(state: &RunState<'_>) -> FaceMap {
+    let t = state.tallies;
+    let g = &state.scene.geometry;
+    let (n_odd, n_even) = t.odd_even_photons();
+    let mut m = FaceMap {
+        illuminance_lx: Vec::with_capacity(g.triangle_count()),
+        indirect_lx: Vec::with_capacity(g.triangle_count()),
+        rel_error: Vec::with_capacity(g.triangle_count()),
+    };
+    for (k, &a) in g.area_m2.iter().enumerate() {
+        let e = |kind, parity| triangle_illuminance_lx(t, kind, k, a, state.total_flux_lm, parity);
+        let total = e(MapKind::Total, None);
+        let rel = if n_odd > 0 && n_even > 0 && total > 0.0 {
+            (e(MapKind::Total, Some(true)) - e(MapKind::Total, Some(false))).abs() / 2.0 / total
+        } else {
+            REL_ERROR_UNKNOWN
+        };
+        m.illuminance_lx.push(total);
+        m.indirect_lx.push(e(MapKind::Indirect, None));
+        m.rel_error.push(rel);
+    }
+    m
+}
+
+/// The PLY file of a run's scene map.
+pub fn scene_map_ply(state: &RunState<'_>) -> Vec<u8> {
+    let g = &state.scene.geometry;
+    let faces = face_map(state);
+    let mut weight = vec![0.0f64; g.vertices.len()];
+    let mut sum = vec![0.0f64; g.vertices.len()];
+    for ((tri, &a), &e) in g
+        .triangles
+        .iter()
+        .zip(&g.area_m2)
+        .zip(&faces.illuminance_lx)
+    {
+        for &v in tri {
+            weight[v as usize] += a;
+            sum[v as usize] += a * e;
+        }
+    }
+    let vertex_lx: Vec<f64> = sum
+        .iter()
+        .zip(&weight)
+        .map(|(&s, &w)| if w > 0.0 { s / w } else { 0.0 })
+        .collect();
+    let scale = percentile(&vertex_lx, 0.99);
+
+    let header = format!(
+        "ply\nformat binary_little_endian 1.0\n\
+         comment luxtally scene map of {}: illuminance in lx\n\
+         comment vertex colours: viridis over 0 .. {} lx (99th percentile of vertex illuminance)\n\
+         element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+         property float illuminance\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
+         element face {}\nproperty list uchar int vertex_indices\nproperty float illuminance\n\
+         property float indirect\nproperty float rel_error\nend_header\n",
+        state.scene.name.replace('\n', " "),
+        scale,
+        g.vertices.len(),
+        g.triangle_count()
+    );
+    let mut out = header.into_bytes();
+    out.reserve(g.vertices.len() * 19 + g.triangle_count() * 25);
+    for (v, &e) in g.vertices.iter().zip(&vertex_lx) {
+        let world = g.origin + v.as_dvec3();
+        for x in [world.x, world.y, world.z, e] {
+            out.extend_from_slice(&(x as f32).to_le_bytes());
+        }
+        out.extend_from_slice(&viridis(normalise(e, scale)));
+    }
+    for (k, tri) in g.triangles.iter().enumerate() {
+        out.push(3);
+        for &v in tri {
+            out.extend_from_slice(&(v as i32).to_le_bytes());
+        }
+        for x in [
+            faces.illuminance_lx[k],
+            faces.indirect_lx[k],
+            faces.rel_error[k],
+        ] {
+            out.extend_from_slice(&(x as f32).to_le_bytes());
+        }
+    }
+    out
+}
+
+/// The `q` quantile (nearest rank) of the finite values, 0 without any.
+fn percentile(values: &[f64], q: f64) -> f64 {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return 0.0;
+    }
+    v.sort_by(f64::total_cmp);
+    let rank = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len());
+    v[rank - 1]
+}

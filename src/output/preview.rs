@@ -1,0 +1,317 @@
+//! PNG previews of the receivers, for people who will not open an EXR:
+//! `receivers/NAME.png` (value) and `receivers/NAME_error.png` (relative error), false
+//! colour (viridis) with a colour bar and its numeric scale, drawn with a built-in 3×5
+//! bitmap font. Built from summary.json's data alone, so `luxtally report` can redo them.
+//!
+//! Orientation: u to the right, v up (cell j = 0 is the bottom row), as on a plan seen
+//! from the side u × v points to. Scales: value 0 … the largest cell value; relative
+//! error 0 … the largest cell error, capped at 100 %. Cells without a value (nothing
+//! scored: error unknown) are grey in the error image.
+
+use super::colormap::{normalise, viridis};
+use crate::stats::relative_error;
+use crate::{Error, Result};
+use serde_json::Value;
+
+/// A receiver's per-cell data as summary.json holds it (index j * cells[0] + i).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReceiverData {
+    pub name: String,
+    pub unit: String,
+    pub cells: [usize; 2],
+    pub values: Vec<f64>,
+    pub sigma: Vec<f64>,
+    pub hits: Vec<u64>,
+}
+
+impl ReceiverData {
+    /// Every receiver of a summary.json document; `origin` names the file in errors.
+    pub fn from_summary(summary: &Value, origin: &str) -> Result<Vec<ReceiverData>> {
+        let bad = |key: &str, what: &str| Error::input(format!("{origin}: {key}"), what);
+        let Some(receivers) = summary.get("receivers") else {
+            return Ok(Vec::new());
+        };
+        let receivers = receivers
+            .as_object()
+            .ok_or_else(|| bad("receivers", "not an object"))?;
+        let mut out = Vec::new();
+        for (name, r) in receivers {
+            let key = |k: &str| format!("receivers.{name}.{k}");
+            let floats = |k: &str| -> Result<Vec<f64>> {
+                r.get(k)
+                    .and_then(Value::as_array)
+                    .ok_or_else(|| bad(&key(k), "missing or not an array"))?
+                    .iter()
+                    // serde_json writes non-finite numbers as null.
+                    .map(|v| {
+                        if v.is_null() {
+                            Ok(f64::NAN)
+                        } else {
+                            v.as_f64().ok_or_else(|| bad(&key(k), "not a number"))
+                        }
+                    })
+                    .collect()
+            };
+            let cells = r
+                .get("cells")
+                .and_then(Value::as_array)
+                .and_then(|c| Some([c.first()?.as_u64()? as usize, c.get(1)?.as_u64()? as usize]))
+                .ok_or_else(|| bad(&key("cells"), "not two cell counts"))?;
+            let values = floats("values")?;
+            let sigma = floats("sigma")?;
+            let hits = r
+                .get("hits")
+                .and_then(Value::as_array)
+                .ok_or_else(|| bad(&key("hits"), "missing or not an array"))?
+                .iter()
+                .map(|v| v.as_u64().ok_or_else(|| bad(&key("hits"), "not a count")))
+                .collect::<Result<Vec<u64>>>()?;
+            let n = cells[0] * cells[1];
+            if values.len() != n || sigma.len() != n || hits.len() != n {
+                return Err(bad(
+                    &key("values"),
+                    "values, sigma and hits must have cells[0] × cells[1] entries",
+                ));
+            }
+            out.push(ReceiverData {
+                name: name.clone(),
+                unit: r
+                    .get("unit")
+                    .and_then(Value::as_str)
+                    .unwrap_or("")
+                    .to_string(),
+                cells,
+                values,
+                sigma,
+                hits,
+            });
+        }
+        Ok(out)
+    }
+
+    /// Per-cell relative error σ/value (eq. 8; 1 where nothing scored).
+    pub fn rel_error(&self) -> Vec<f64> {
+        self.values
+            .iter()
+            .zip(&self.sigma)
+            .map(|(&v, &s)| relative_error(v, s))
+            .collect()
+    }
+}
+
+/// The two previews of a receiver, PNG-encoded: (value image, error image).
+pub fn receiver_pngs(r: &ReceiverData) -> Result<(Vec<u8>, Vec<u8>)> {
+    let max_value = r
+        .values
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let value_px = |k: usize| viridis(normalise(r.values[k], max_value));
+    let value = false_colour(r.cells, &value_px, max_value, 1.0, &r.unit)?;
+
+    let errors = r.rel_error();
+    let max_error = errors
+        .iter()
+        .zip(&r.values)
+        .filter(|(e, &v)| v > 0.0 && e.is_finite())
+        .map(|(e, _)| *e)
+        .fold(0.0, f64::max)
+        .min(1.0);
+    let error_px = |k: usize| {
+        if r.values[k] > 0.0 {
+            viridis(normalise(errors[k], max_error))
+        } else {
+            [160, 160, 160]
+        }
+    };
+    let error = false_colour(r.cells, &error_px, max_error, 100.0, "%")?;
+    Ok((value, error))
+}
+
+const MARGIN: usize = 8;
+const BAR_W: usize = 16;
+const GLYPH_SCALE: usize = 2;
+const ADVANCE: usize = 4 * GLYPH_SCALE;
+const TICKS: usize = 5;
+/// From the bar's edge to its labels, past the 3 px tick marks.
+const LABEL_GAP: usize = 10;
+
+/// An RGB canvas: the image scaled up to ≥ 256 px wide, a colour bar 0 … `scale` and
+/// its labels (`scale · label_factor`, then `unit`).
+fn false_colour(
+    cells: [usize; 2],
+    colour: &dyn Fn(usize) -> [u8; 3],
+    scale: f64,
+    label_factor: f64,
+    unit: &str,
+) -> Result<Vec<u8>> {
+    let [w, h] = cells;
+    if w == 0 || h == 0 {
+        return Err(Error::Unsupported(
+            "a receiver without cells has no image".into(),
+        ));
+    }
+    // At least 256 px wide, but no taller than 2048 px for the sake of a tall receiver.
+    let s = 256usize.div_ceil(w).min((2048 / h).max(1)).max(1);
+    let (img_w, img_h) = (w * s, h * s);
+    let top = MARGIN + 5 * GLYPH_SCALE + 6;
+    let bar_h = img_h.max(128);
+    let labels: Vec<String> = (0..TICKS)
+        .map(|t| {
+            let v = scale * label_factor * t as f64 / (TICKS - 1) as f64;
+            format_number(v)
+        })
+        .collect();
+    let label_w = labels.iter().map(|l| l.len()).max().unwrap_or(1) * ADVANCE;
+    let bar_x = MARGIN + img_w + 12;
+    let width = bar_x + BAR_W + LABEL_GAP + label_w.max(unit.len() * ADVANCE) + MARGIN;
+    let height = top + bar_h + MARGIN + 5 * GLYPH_SCALE;
+    let mut c = Canvas::new(width, height);
+
+    for py in 0..img_h {
+        let j = h - 1 - py / s;
+        for px in 0..img_w {
+            let i = px / s;
+            c.set(MARGIN + px, top + py, colour(j * w + i));
+        }
+    }
+    for y in 0..bar_h {
+        let t = 1.0 - y as f64 / (bar_h - 1).max(1) as f64;
+        for x in 0..BAR_W {
+            c.set(bar_x + x, top + y, viridis(t));
+        }
+    }
+    c.text(bar_x, MARGIN, unit);
+    // A scale of 0 (nothing scored) gets its one label.
+    let shown = if scale > 0.0 { TICKS } else { 1 };
+    for (t, label) in labels.iter().enumerate().take(shown) {
+        let y = top + (bar_h - 1) * (TICKS - 1 - t) / (TICKS - 1);
+        for x in 0..3 {
+            c.set(bar_x + BAR_W + x, y, [0, 0, 0]);
+        }
+        let ty = y
+            .saturating_sub(5 * GLYPH_SCALE / 2)
+            .max(top.saturating_sub(2));
+        c.text(bar_x + BAR_W + LABEL_GAP, ty, label);
+    }
+    c.encode()
+}
+
+/// A short label: 3 significant digits, exponent form outside [1e-3, 1e5).
+pub fn format_number(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return "0".into();
+    }
+    let a = v.abs();
+    if !(1e-3..1e5).contains(&a) {
+        return format!("{v:.2e}");
+    }
+    let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+struct Canvas {
+    width: usize,
+    height: usize,
+    rgb: Vec<u8>,
+}
+
+impl Canvas {
+    fn new(width: usize, height: usize) -> Canvas {
+        Canvas {
+            width,
+            height,
+            rgb: vec![255; width * height * 3],
+        }
+    }
+
+    fn set(&mut self, x: usize, y: usize, c: [u8; 3]) {
+        if x < self.width && y < self.height {
+            let k = 3 * (y * self.width + x);
+            self.rgb[k..k + 3].copy_from_slice(&c);
+        }
+    }
+
+    fn text(&mut self, x: usize, y: usize, s: &str) {
+        for (n, ch) in s.chars().enumerate() {
+            let rows = glyph(ch);
+            for (gy, row) in rows.iter().enumerate() {
+                for gx in 0..3 {
+                    if row & (4 >> gx) != 0 {
+                        for dy in 0..GLYPH_SCALE {
+                            for dx in 0..GLYPH_SCALE {
+                                self.set(
+                                    x + n * ADVANCE + gx * GLYPH_SCALE + dx,
+                                    y + gy * GLYPH_SCALE + dy,
+                                    [0, 0, 0],
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    fn encode(&self) -> Result<Vec<u8>> {
+        let mut bytes = Vec::new();
+        let err = |e: png::EncodingError| Error::Unsupported(format!("PNG encoding: {e}"));
+        {
+            let mut enc = png::Encoder::new(&mut bytes, self.width as u32, self.height as u32);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            let mut writer = enc.write_header().map_err(err)?;
+            writer.write_image_data(&self.rgb).map_err(err)?;
+            writer.finish().map_err(err)?;
+        }
+        Ok(bytes)
+    }
+}
+
+/// 3×5 glyphs, one row per entry, bit 2 = left column. Unknown characters are blank.
+fn glyph(c: char) -> [u8; 5] {
+    match c {
+        '0' => [7, 5, 5, 5, 7],
+        '1' => [2, 6, 2, 2, 7],
+        '2' => [7, 1, 7, 4, 7],
+        '3' => [7, 1, 7, 1, 7],
+        '4' => [5, 5, 7, 1, 1],
+        '5' => [7, 4, 7, 1, 7],
+        '6' => [7, 4, 7, 5, 7],
+        '7' => [7, 1, 1, 1, 1],
+        '8' => [7, 5, 7, 5, 7],
+        '9' => [7, 5, 7, 1, 7],
+        '.' => [0, 0, 0, 0, 2],
+        '-' => [0, 0, 7, 0, 0],
+        '+' => [0, 2, 7, 2, 0],
+        'e' => [0, 7, 7, 4, 7],
+        '%' => [5, 1, 2, 4, 5],
+        'l' => [2, 2, 2, 2, 3],
+        'x' => [0, 0, 5, 2, 5],
+        'c' => [0, 0, 7, 4, 7],
+        'd' => [1, 1, 7, 5, 7],
+        'm' => [0, 0, 7, 7, 5],
+        '/' => [1, 1, 2, 4, 4],
+        _ => [0; 5],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn labels_are_short_and_round_trip_their_digits() {
+        assert_eq!(format_number(0.0), "0");
+        assert_eq!(format_number(312.6), "313");
+        assert_eq!(format_number(12.5), "12.5");
+        assert_eq!(format_number(0.25), "0.25");
+        assert_eq!(format_number(123456.0), "1.23e5");
+    }
+}

@@ -1,0 +1,80 @@
+//! Per-receiver files: `receivers/NAME.exr` and `receivers/NAME.csv`, the numbers of
+//! summary.json's receiver entry laid out as an image and as a table.
+//!
+//! EXR: one layer named after the receiver, data window cells[0] × cells[1] at (0, 0),
+//! x = i along u, y = j along v, so row y = 0 (the top row in image viewers) is j = 0,
+//! the edge through `corner`. Four 32-bit float channels, no compression loss (ZIP):
+//! `value` (lx or cd/m²), `sigma` (same unit), `rel_error` (σ/value, 1 where nothing
+//! scored) and `hits`. summary.json's f64 numbers are rounded to the nearest f32
+//! (`as f32`); hits are exact up to 2^24 = 16,777,216 per cell.
+//!
+//! CSV: a header line, then one row per cell in index order j * cells[0] + i:
+//! `i,j,x_m,y_m,z_m,value,sigma,rel_error,hits`, the cell centre in world metres and
+//! f64 numbers printed in full round-trip precision.
+
+use crate::output::summary::ReceiverSummary;
+use crate::scene::Receiver;
+use crate::stats::relative_error;
+use crate::{Error, Result};
+use exr::prelude::*;
+use std::fmt::Write as _;
+
+/// The EXR of a receiver, as bytes.
+pub fn receiver_exr(name: &str, r: &ReceiverSummary) -> Result<Vec<u8>> {
+    let size = (r.cells[0] as usize, r.cells[1] as usize);
+    let f32s = |v: &[f64]| FlatSamples::F32(v.iter().map(|&x| x as f32).collect());
+    let rel: Vec<f64> = r
+        .values
+        .iter()
+        .zip(&r.sigma)
+        .map(|(&v, &s)| relative_error(v, s))
+        .collect();
+    let hits: Vec<f64> = r.hits.iter().map(|&h| h as f64).collect();
+    let channels = AnyChannels::sort(SmallVec::from_vec(vec![
+        AnyChannel::new("value", f32s(&r.values)),
+        AnyChannel::new("sigma", f32s(&r.sigma)),
+        AnyChannel::new("rel_error", f32s(&rel)),
+        AnyChannel::new("hits", f32s(&hits)),
+    ]));
+    let mut attributes = LayerAttributes::named(name);
+    attributes.comments = Some(Text::from(
+        format!(
+            "luxtally receiver {name}: {} in {}; x = i along u, y = j along v",
+            r.quantity, r.unit
+        )
+        .as_str(),
+    ));
+    let layer = Layer::new(size, attributes, Encoding::SMALL_LOSSLESS, channels);
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(&mut bytes)
+        .map_err(|e| Error::Unsupported(format!("receivers/{name}.exr: {e}")))?;
+    Ok(bytes.into_inner())
+}
+
+/// The CSV of a receiver, with cell centres from its geometry.
+pub fn receiver_csv(receiver: &Receiver, r: &ReceiverSummary) -> String {
+    let [nu, nv] = [r.cells[0] as usize, r.cells[1] as usize];
+    let mut s = String::from("i,j,x_m,y_m,z_m,value,sigma,rel_error,hits\n");
+    for j in 0..nv {
+        for i in 0..nu {
+            let k = j * nu + i;
+            let c = receiver.corner
+                + receiver.u * ((i as f64 + 0.5) / nu as f64)
+                + receiver.v * ((j as f64 + 0.5) / nv as f64);
+            let _ = writeln!(
+                s,
+                "{i},{j},{},{},{},{},{},{},{}",
+                c.x,
+                c.y,
+                c.z,
+                r.values[k],
+                r.sigma[k],
+                relative_error(r.values[k], r.sigma[k]),
+                r.hits[k]
+            );
+        }
+    }
+    s
+}

@@ -1,0 +1,297 @@
+//! report.html in a real browser: Debian's chromium, headless, with networking off,
+//! opens the report of a finished run, of a live run (--report-every) and of a run
+//! stopped by Ctrl-C (SIGINT); every chart must have drawn (`data-rendered="1"` on each
+//! `data-chart` container), the page's error box must be empty and the console must
+//! show no uncaught error. Screenshots are saved as test artifacts in
+//! `<cargo target dir>/test-artifacts/` (`report.png`, `report_live.png`,
+//! `report_interrupted.png`, `report_edge.png`). Skipped, with a message, where
+//! /usr/bin/chromium is absent (scripts/setup.sh installs it).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+const CHROMIUM: &str = "/usr/bin/chromium";
+
+fn chromium_missing() -> bool {
+    if Path::new(CHROMIUM).exists() {
+        return false;
+    }
+    eprintln!("skipped: chromium not installed ({CHROMIUM}; scripts/setup.sh installs it)");
+    true
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("luxtally-browser-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    dir
+}
+
+/// `<target dir>/test-artifacts`, found from the binary under test
+/// (`<target dir>/<profile>/luxtally`).
+fn artifacts_dir() -> PathBuf {
+    let bin = Path::new(env!("CARGO_BIN_EXE_luxtally"));
+    let dir = bin
+        .parent()
+        .and_then(Path::parent)
+        .unwrap_or(Path::new("target"))
+        .join("test-artifacts");
+    std::fs::create_dir_all(&dir).expect("artifacts dir");
+    dir
+}
+
+/// Headless chromium with every network feature off and a throw-away profile.
+fn chromium(extra: &[&str], page: &Path) -> std::process::Output {
+    let profile = temp_dir(&format!(
+        "profile-{}",
+        page.file_stem().unwrap().to_string_lossy()
+    ));
+    let url = format!(
+        "file://{}",
+        page.canonicalize().expect("page exists").display()
+    );
+    let mut args = vec![
+        "90".to_string(),
+        CHROMIUM.to_string(),
+        "--headless".into(),
+        "--no-sandbox".into(),
+        "--disable-gpu".into(),
+        "--disable-background-networking".into(),
+        "--disable-component-update".into(),
+        "--disable-sync".into(),
+        "--no-first-run".into(),
+        "--disable-extensions".into(),
+        // Any request to a host fails: the page must need none.
+        "--host-resolver-rules=MAP * ~NOTFOUND".into(),
+        "--enable-logging=stderr".into(),
+        "--v=0".into(),
+        format!("--user-data-dir={}", profile.display()),
+    ];
+    args.extend(extra.iter().map(|s| s.to_string()));
+    args.push(url);
+    let out = Command::new("timeout")
+        .args(&args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("chromium runs");
+    let _ = std::fs::remove_dir_all(&profile);
+    out
+}
+
+/// Opens `report` (through a copy, `view-NAME.html`: the run may rewrite the original) and checks that it rendered; saves
+/// `<artifacts>/name.png`.
+fn assert_report_renders(report: &Path, name: &str, receivers: usize) {
+    let page = report.with_file_name(format!("view-{name}.html"));
+    std::fs::copy(report, &page).expect("copy report");
+    let dom = chromium(&["--dump-dom"], &page);
+    let html = String::from_utf8_lossy(&dom.stdout);
+    let log = String::from_utf8_lossy(&dom.stderr);
+    assert!(
+        html.contains("data-report-done=\"1\""),
+        "{name}: the script ran to its end\n{log}"
+    );
+    let charts = html.matches("data-chart=").count();
+    let rendered = html.matches("data-rendered=\"1\"").count();
+    assert_eq!(
+        charts,
+        1 + 5 * receivers,
+        "{name}: accuracy chart + 5 per receiver"
+    );
+    assert_eq!(rendered, charts, "{name}: every chart rendered");
+    assert!(
+        html.contains("<pre id=\"errors\"></pre>"),
+        "{name}: the page reported errors: {}",
+        html.split("<pre id=\"errors\">")
+            .nth(1)
+            .unwrap_or("")
+            .split("</pre>")
+            .next()
+            .unwrap_or("")
+    );
+    for line in log.lines().filter(|l| l.contains("CONSOLE")) {
+        assert!(
+            !line.contains("Uncaught") && !line.contains("Error"),
+            "{name}: console: {line}"
+        );
+    }
+    let shot = artifacts_dir().join(format!("{name}.png"));
+    let _ = std::fs::remove_file(&shot);
+    let out = chromium(
+        &[
+            &format!("--screenshot={}", shot.display()),
+            "--window-size=1200,2300",
+            "--hide-scrollbars",
+        ],
+        &page,
+    );
+    assert!(
+        shot.exists(),
+        "{name}: screenshot saved\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    eprintln!("{name}: screenshot in {}", shot.display());
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary.json");
+    serde_json::from_str(&text).expect("JSON")
+}
+
+#[test]
+fn report_of_a_finished_run_renders_every_chart_offline() {
+    if chromium_missing() {
+        return;
+    }
+    let dir = temp_dir("finished");
+    let out = Command::new(env!("CARGO_BIN_EXE_luxtally"))
+        .args([
+            "run",
+            "scenes/office.toml",
+            "--photons",
+            "20000000",
+            "--target-error",
+            "0.1",
+        ])
+        .args(["--quiet", "--out", dir.to_str().unwrap()])
+        .output()
+        .expect("binary runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(summary(&dir)["stop_reason"], "target_error");
+    assert_report_renders(&dir.join("report.html"), "report", 1);
+}
+
+#[test]
+fn reports_of_a_live_run_and_of_a_run_stopped_by_ctrl_c_render() {
+    if chromium_missing() {
+        return;
+    }
+    let dir = temp_dir("interrupted");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_luxtally"))
+        .args(["run", "scenes/office.toml", "--photons", "100000000000"])
+        .args(["--report-every", "1", "--quiet", "--threads", "1"])
+        .args(["--out", dir.to_str().unwrap()])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("binary starts");
+    let report = dir.join("report.html");
+    let start = Instant::now();
+    while !report.exists() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no live report.html within 60 s"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    // Let a few epochs pass, so the live page has history to plot.
+    std::thread::sleep(Duration::from_millis(1500));
+    let live = dir.join("live.html");
+    std::fs::copy(&report, &live).expect("copy live report");
+    let live_html = std::fs::read_to_string(&live).unwrap();
+    assert!(
+        live_html.contains("<meta http-equiv=\"refresh\" content=\"1\">"),
+        "the live page reloads itself"
+    );
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(kill.success());
+    let start = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            break status;
+        }
+        if start.elapsed() > Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("the run did not end within 60 s of SIGINT");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let mut err = String::new();
+    if let Some(mut e) = child.stderr.take() {
+        use std::io::Read;
+        let _ = e.read_to_string(&mut err);
+    }
+    assert!(status.success(), "exit {status}: {err}");
+    assert_eq!(summary(&dir)["stop_reason"], "interrupted");
+    let html = std::fs::read_to_string(&report).unwrap();
+    assert!(
+        !html.contains("http-equiv"),
+        "the final page stops reloading"
+    );
+    for f in ["scene_map.ply", "receivers/desk.exr", "receivers/desk.png"] {
+        assert!(dir.join(f).exists(), "{f} written on Ctrl-C");
+    }
+    assert_report_renders(&live, "report_live", 1);
+    assert_report_renders(&report, "report_interrupted", 1);
+}
+
+#[test]
+fn report_of_dark_tall_and_luminance_receivers_renders() {
+    if chromium_missing() {
+        return;
+    }
+    let dir = temp_dir("edge");
+    // A receiver no photon reaches (nothing scored), a 1 × 600 strip, a luminance meter.
+    let scene = r#"
+name = "edge"
+[materials.floor]
+reflectance = 0.5
+[[objects]]
+shape = "rect"
+corner = [0, 0, 0]
+u = [4, 0, 0]
+v = [0, 4, 0]
+material = "floor"
+[[lights]]
+type = "point"
+position = [2, 2, 2]
+intensity_cd = 100
+[[receivers]]
+name = "dark"
+corner = [0, 0, 5]
+u = [1, 0, 0]
+v = [0, 1, 0]
+cells = [3, 2]
+[[receivers]]
+name = "tall strip"
+corner = [0, 2, 0.01]
+u = [0, 0.1, 0]
+v = [4, 0, 0]
+cells = [1, 600]
+[[receivers]]
+name = "lum"
+corner = [0, 0, 0.5]
+u = [4, 0, 0]
+v = [0, 4, 0]
+cells = [20, 20]
+quantity = "luminance"
+view_direction = [0, 0, -1]
+half_angle_deg = 10
+"#;
+    let path = dir.join("edge.toml");
+    std::fs::write(&path, scene).expect("scene written");
+    let out = Command::new(env!("CARGO_BIN_EXE_luxtally"))
+        .args([
+            "run",
+            path.to_str().unwrap(),
+            "--photons",
+            "300000",
+            "--quiet",
+        ])
+        .args(["--out", dir.join("out").to_str().unwrap()])
+        .output()
+        .expect("binary runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_report_renders(&dir.join("out/report.html"), "report_edge", 3);
+}
