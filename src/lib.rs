@@ -10,6 +10,7 @@ pub mod accel;
 pub mod bench;
 pub mod error;
 pub mod output;
+pub mod render;
 pub mod rng;
 pub mod run;
 pub mod scene;
