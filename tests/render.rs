@@ -404,3 +404,145 @@ fn both_backends_give_the_same_image() {
         "{differing} pixels differ"
     );
 }
+
+/// Loads `text` as a scene file and returns its error, checked to be one line naming the
+/// file and `key`.
+fn camera_error(text: &str, key: &str) -> String {
+    let path = std::env::temp_dir().join(format!(
+        "luxtally-camera-{}-{}.toml",
+        std::process::id(),
+        key.replace('.', "_")
+    ));
+    std::fs::write(&path, text).unwrap();
+    let result = luxtally::scene::load(&path);
+    let _ = std::fs::remove_file(&path);
+    let message = match result {
+        Ok(_) => panic!("scene loaded but should not have:\n{text}"),
+        Err(e) => e.to_string(),
+    };
+    assert!(!message.contains('\n'), "not one line: {message:?}");
+    for part in [&path.display().to_string(), key] {
+        assert!(message.contains(part), "`{part}` missing from: {message}");
+    }
+    message
+}
+
+#[test]
+fn bad_camera_keys_are_one_line_errors_naming_the_key() {
+    let good = "position = [0, 0, 1]\nlook_at = [1, 0, 1]\nfov_deg = 60\nresolution = [8, 6]\n";
+    let with = |replace: &str, by: &str| format!("[camera]\n{}", good.replace(replace, by));
+    let cases = [
+        (
+            with("look_at = [1, 0, 1]", "look_at = [0, 0, 1]"),
+            "camera.look_at",
+        ),
+        (format!("[camera]\n{good}up = [1, 0, 0]\n"), "camera.up"),
+        (format!("[camera]\n{good}up = [0, 0, 0]\n"), "camera.up"),
+        (with("fov_deg = 60", "fov_deg = 180"), "camera.fov_deg"),
+        (with("fov_deg = 60", "fov_deg = -5"), "camera.fov_deg"),
+        (with("[8, 6]", "[0, 6]"), "camera.resolution"),
+        (with("[8, 6]", "[8, 100000]"), "camera.resolution"),
+        (with("[8, 6]", "[8]"), "camera.resolution"),
+        (format!("[camera]\n{good}samples = 0\n"), "camera.samples"),
+        (
+            format!("[camera]\n{good}area_light_samples = 0\n"),
+            "camera.area_light_samples",
+        ),
+        (
+            format!("[camera]\n{good}max_depth = 1000\n"),
+            "camera.max_depth",
+        ),
+        (
+            format!("[camera]\n{good}interpolate = 1\n"),
+            "camera.interpolate",
+        ),
+        (format!("[camera]\n{good}zoom = 2\n"), "zoom"),
+        (with("fov_deg = 60\n", ""), "fov_deg"),
+        (
+            with("position = [0, 0, 1]", "position = [0, nan, 1]"),
+            "camera.position",
+        ),
+    ];
+    for (text, key) in &cases {
+        let m = camera_error(text, key);
+        eprintln!("{m}");
+    }
+}
+
+fn luxtally(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_luxtally"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("binary runs")
+}
+
+#[test]
+fn render_command_writes_images_and_reuses_a_finished_run() {
+    let dir = std::env::temp_dir().join(format!("luxtally-render-cli-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let run_dir = dir.join("run");
+    let run_dir_s = run_dir.to_str().unwrap();
+    let out = luxtally(&[
+        "run",
+        "scenes/office.toml",
+        "--photons",
+        "50000",
+        "--quiet",
+        "--out",
+        run_dir_s,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(run_dir.join("indirect_map.bin").exists());
+    // --from: no photon pass, images next to the run's outputs.
+    let out = luxtally(&["render", "scenes/office.toml", "--from", run_dir_s]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("eye rays/s") && text.contains("per megapixel"),
+        "{text}"
+    );
+    for f in ["render.exr", "render.png", "render_false_colour.png"] {
+        assert!(run_dir.join(f).exists(), "{f}");
+    }
+    // A map of another scene is refused, on one line naming the map.
+    let other = dir.join("other.toml");
+    let office = std::fs::read_to_string("scenes/office.toml").unwrap();
+    std::fs::write(
+        &other,
+        office.replace("intensity_cd = 1000", "intensity_cd = 999"),
+    )
+    .unwrap();
+    let out = luxtally(&["render", other.to_str().unwrap(), "--from", run_dir_s]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("indirect_map.bin") && err.contains("another scene"),
+        "{err}"
+    );
+    // A scene without a camera.
+    std::fs::write(&other, office.split("[camera]").next().unwrap()).unwrap();
+    let out = luxtally(&[
+        "render",
+        other.to_str().unwrap(),
+        "--quiet",
+        "--photons",
+        "1000",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("[camera]") && err.contains("other.toml"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

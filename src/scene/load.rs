@@ -630,7 +630,7 @@ fn camera(c: CameraFile, at: &str) -> Result<Camera> {
     let look_at = vec3(c.look_at);
     let view = (look_at - position)
         .try_normalize()
-        .ok_or_else(|| Error::input(key("look_at"), "is the camera position"))?;
+        .ok_or_else(|| Error::input(key("look_at"), "is the same point as position"))?;
     let up = direction(c.up.unwrap_or([0.0, 0.0, 1.0]), at, "up")?;
     if view.cross(up).length() < 1e-6 {
         return Err(Error::input(key("up"), "is parallel to the view direction"));
