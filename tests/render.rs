@@ -546,3 +546,54 @@ fn render_command_writes_images_and_reuses_a_finished_run() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// How the area-source sample count was chosen (docs/render.md): the relative noise of
+/// the direct term over pixels that all see (nearly) the same floor point, for n × n
+/// samples at heights h below a 1 × 0.8 m source. `cargo test --release --test render
+/// area_source_noise -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn area_source_noise_by_sample_count() {
+    for h in [0.25, 0.5, 1.5] {
+        for n in [4, 8, 16] {
+            let s = scene(&format!(
+                r#"
+[materials.floor]
+reflectance = 0.7
+[[objects]]
+shape = "rect"
+corner = [-3, -3, 0]
+u = [6, 0, 0]
+v = [0, 6, 0]
+material = "floor"
+[[lights]]
+type = "area"
+corner = [-0.5, -0.4, {h}]
+u = [0, 0.8, 0]
+v = [1, 0, 0]
+luminance_cdm2 = 2000
+[camera]
+position = [0, 0, {}]
+look_at = [0, 0, 0]
+up = [0, 1, 0]
+fov_deg = 0.01
+resolution = [64, 64]
+area_light_samples = {n}
+"#,
+                h * 0.5
+            ));
+            let map = IndirectMap::zero(s.geometry.triangle_count());
+            let l = render_with(&s, &map, Backend::Embree, 2)
+                .image
+                .luminance_cdm2;
+            let mean = l.iter().sum::<f64>() / l.len() as f64;
+            let sd = (l.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / l.len() as f64).sqrt();
+            let exact = 0.7 * 2000.0 * 4.0 * parallel_corner_factor(0.5, 0.4, h);
+            eprintln!(
+                "h = {h} m, n = {n}: noise {:.4} %, bias {:+.4} %",
+                100.0 * sd / mean,
+                100.0 * (mean / exact - 1.0)
+            );
+        }
+    }
+}

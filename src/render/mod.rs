@@ -12,7 +12,9 @@ mod font;
 pub mod map;
 pub mod output;
 
-pub use eye::{EyePass, Image, RayCounts, Scratch, TILE_PIXELS};
+pub use eye::{
+    area_samples_per_side, EyePass, Image, RayCounts, Scratch, MAX_AREA_SAMPLES, TILE_PIXELS,
+};
 pub use map::{IndirectField, IndirectMap, MAP_FILE};
 
 use crate::accel::RayCaster;

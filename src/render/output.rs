@@ -119,32 +119,44 @@ fn pseudo_colour(f: f64) -> [u8; 3] {
     [0, 1, 2].map(|c| ((a[c] + (b[c] - a[c]) * t) * 255.0).round() as u8)
 }
 
-/// The false-colour scale: whole decades from 10^lo to 10^hi (cd/m²). The top decade is
-/// the one above the 99.9th percentile; the range spans the 1st percentile, 2 to 4
-/// decades.
+/// Scale values: 1, 2 and 5 times a power of ten.
+fn nice(k: i32) -> f64 {
+    [1.0, 2.0, 5.0][k.rem_euclid(3) as usize] * 10f64.powi(k.div_euclid(3))
+}
+
+/// The false-colour scale, as indices of [`nice`] values (bottom, top): the top is the
+/// first 1-2-5 value at or above the 99.9th percentile, the bottom the last at or below
+/// the 1st percentile, at least one and at most four decades below the top.
 pub fn false_colour_range(l: &[f64]) -> (i32, i32) {
     let top = quantile(l, 0.999);
     if top <= 0.0 {
-        return (-1, 0);
+        return (-3, 0);
     }
-    let hi = top.log10().ceil() as i32;
-    let bottom = quantile(l, 0.01).max(top * 1e-4);
-    let lo = (bottom.log10().floor() as i32).clamp(hi - 4, hi - 2);
+    let mut hi = (top.log10().floor() as i32) * 3;
+    while nice(hi) < top {
+        hi += 1;
+    }
+    let bottom = quantile(l, 0.01);
+    let mut lo = hi - 3;
+    while lo > hi - 12 && nice(lo) > bottom {
+        lo -= 1;
+    }
     (lo, hi)
 }
 
-fn decade_label(e: i32) -> String {
-    if (0..=6).contains(&e) {
-        format!("{}", 10u64.pow(e as u32))
-    } else if (-3..0).contains(&e) {
-        format!("{:.*}", (-e) as usize, 10f64.powi(e))
+fn scale_label(v: f64) -> String {
+    if (1.0..1e6).contains(&v) {
+        format!("{v:.0}")
+    } else if (1e-3..1.0).contains(&v) {
+        let s = format!("{v:.3}");
+        s.trim_end_matches('0').to_string()
     } else {
-        format!("1e{e}")
+        format!("{v:e}")
     }
 }
 
-/// Writes the log-scale pseudo-colour image with a scale bar and decade labels at its
-/// right (cd/m²); pixels that see nothing (L = 0) are black.
+/// Writes the log-scale pseudo-colour image with a scale bar and labels at its
+/// right, labelled at 1-2-5 values (cd/m²); pixels that see nothing (L = 0) are black.
 pub fn write_false_colour_png(image: &Image, path: &Path) -> Result<()> {
     const PANEL: usize = 96;
     const SCALE: usize = 2;
@@ -153,7 +165,8 @@ pub fn write_false_colour_png(image: &Image, path: &Path) -> Result<()> {
     let height = h.max(160);
     let mut rgb = vec![0u8; 3 * width * height];
     let (lo, hi) = false_colour_range(&image.luminance_cdm2);
-    let position = |l: f64| (l.log10() - lo as f64) / (hi - lo) as f64;
+    let (log_lo, log_hi) = (nice(lo).log10(), nice(hi).log10());
+    let position = |l: f64| (l.log10() - log_lo) / (log_hi - log_lo);
     for y in 0..h {
         for x in 0..w {
             let l = image.luminance_cdm2[y * w + x];
@@ -175,15 +188,15 @@ pub fn write_false_colour_png(image: &Image, path: &Path) -> Result<()> {
             rgb[at..at + 3].copy_from_slice(&pseudo_colour(f));
         }
     }
-    for e in lo..=hi {
-        let f = (e - lo) as f64 / (hi - lo) as f64;
+    for k in lo..=hi {
+        let f = position(nice(k));
         let y = bottom - (f * (bottom - top) as f64).round() as usize;
         // Ticks across the bar (a tick beside a label would read as a minus sign).
         for x in bar_x..bar_x + bar_w {
             let at = 3 * (y * width + x);
             rgb[at..at + 3].copy_from_slice(&[0, 0, 0]);
         }
-        let label = decade_label(e);
+        let label = scale_label(nice(k));
         let x = (bar_x + bar_w + 6).min(width.saturating_sub(text_width(&label, SCALE)));
         draw_text(
             &mut rgb,
@@ -203,4 +216,32 @@ pub fn write_all(image: &Image, dir: &Path) -> Result<()> {
     write_exr(image, &dir.join("render.exr"))?;
     write_tone_mapped_png(image, &dir.join("render.png"))?;
     write_false_colour_png(image, &dir.join("render_false_colour.png"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn false_colour_scale_brackets_the_image_on_1_2_5_values() {
+        let l: Vec<f64> = (0..1000).map(|i| 8.0 + 52.0 * i as f64 / 999.0).collect();
+        let (lo, hi) = false_colour_range(&l);
+        assert_eq!((nice(lo), nice(hi)), (5.0, 100.0));
+        assert_eq!(scale_label(0.05), "0.05");
+        assert_eq!(scale_label(200.0), "200");
+        assert_eq!(scale_label(2e-5), "2e-5");
+    }
+
+    #[test]
+    fn tone_map_sends_the_log_average_to_the_key() {
+        // A uniform image: every pixel is the log-average, Ls = KEY, Lwhite = KEY.
+        let image = Image {
+            width: 2,
+            height: 1,
+            luminance_cdm2: vec![40.0, 40.0],
+        };
+        let ls = KEY * 40.0 / log_average_cdm2(&image.luminance_cdm2);
+        let expected = srgb(ls * (1.0 + ls / (ls * ls)) / (1.0 + ls));
+        assert_eq!(tone_map(&image), vec![expected; 2]);
+    }
 }
