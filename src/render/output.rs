@@ -9,7 +9,7 @@ use std::path::Path;
 /// Reinhard's key value: the log-average luminance maps to this display value.
 pub const KEY: f64 = 0.18;
 /// Scaled luminances at or above this percentile burn to white (Reinhard's L_white).
-pub const WHITE_PERCENTILE: f64 = 0.99;
+pub const WHITE_PERCENTILE: f64 = 0.999;
 
 /// Writes the luminance as a one-channel (`Y`) f32 EXR.
 pub fn write_exr(image: &Image, path: &Path) -> Result<()> {
@@ -55,7 +55,7 @@ fn srgb(c: f64) -> u8 {
 }
 
 /// Reinhard et al. 2002 global operator: Ls = KEY·L/L̄w, Ld = Ls(1 + Ls/Lwhite²)/(1 + Ls)
-/// with Lwhite the 99th percentile of Ls, then sRGB; grey (luminance only).
+/// with Lwhite the 99.9th percentile of Ls, then sRGB; grey (luminance only).
 pub fn tone_map(image: &Image) -> Vec<u8> {
     let l = &image.luminance_cdm2;
     let avg = log_average_cdm2(l);
