@@ -597,3 +597,83 @@ area_light_samples = {n}
         }
     }
 }
+
+/// A 3 × 3 image looking straight down from (0, 0, `eye_z`): the centre pixel's ray is
+/// the −z axis.
+fn looking_down(eye_z: f64) -> String {
+    format!(
+        "[camera]\nposition = [0, 0, {eye_z}]\nlook_at = [0, 0, 0]\nup = [0, 1, 0]\nfov_deg = 1\nresolution = [3, 3]\n"
+    )
+}
+
+#[test]
+fn diffuse_transmitter_shows_light_from_its_other_side() {
+    // A translucent pane (τ = 0.4, ρ = 0.1) with the source below it, seen from above:
+    // L = τ·I·cos θ/(π r²) (light on the far face); its near face gets no direct light.
+    let s = scene(&format!(
+        r#"
+[materials.pane]
+reflectance = 0.1
+transmittance = 0.4
+[[objects]]
+shape = "rect"
+corner = [-1, -1, 1]
+u = [2, 0, 0]
+v = [0, 2, 0]
+material = "pane"
+[[lights]]
+type = "point"
+position = [0.3, 0, 0.2]
+intensity_cd = 50
+{}"#,
+        looking_down(3.0)
+    ));
+    let map = IndirectMap::zero(s.geometry.triangle_count());
+    let got = render_with(&s, &map, Backend::Embree, 1)
+        .image
+        .luminance_cdm2[4];
+    let to = DVec3::new(0.3, 0.0, 0.2) - DVec3::new(0.0, 0.0, 1.0);
+    let want = 0.4 * 50.0 * (-to.z / to.length()) / (PI * to.length_squared());
+    assert!((got / want - 1.0).abs() < 1e-4, "{got} against {want}");
+}
+
+#[test]
+fn glass_pane_passes_the_floor_at_normal_incidence_fresnel() {
+    // Eye ray straight down through a glass interface (t_s = 0.9, n = 1.5): the floor
+    // below shows through at t_s·(1 − F), F = ((n − 1)/(n + 1))² = 0.04; the reflected
+    // part sees nothing. The source is under the glass (glass casts a direct shadow).
+    let s = scene(&format!(
+        r#"
+[materials.glass]
+specular_transmittance = 0.9
+ior = 1.5
+[materials.floor]
+reflectance = 0.5
+[[objects]]
+shape = "rect"
+corner = [-1, -1, 2]
+u = [2, 0, 0]
+v = [0, 2, 0]
+material = "glass"
+[[objects]]
+shape = "rect"
+corner = [-3, -3, 0]
+u = [6, 0, 0]
+v = [0, 6, 0]
+material = "floor"
+[[lights]]
+type = "point"
+position = [0.3, 0, 1]
+intensity_cd = 80
+{}"#,
+        looking_down(3.0)
+    ));
+    let map = IndirectMap::zero(s.geometry.triangle_count());
+    let got = render_with(&s, &map, Backend::Embree, 1)
+        .image
+        .luminance_cdm2[4];
+    let fresnel = (0.5f64 / 2.5).powi(2);
+    let floor = lambert_point_cdm2(0.5, 80.0, DVec3::new(0.3, 0.0, 1.0), DVec3::ZERO);
+    let want = 0.9 * (1.0 - fresnel) * floor;
+    assert!((got / want - 1.0).abs() < 1e-4, "{got} against {want}");
+}
