@@ -677,3 +677,28 @@ intensity_cd = 80
     let want = 0.9 * (1.0 - fresnel) * floor;
     assert!((got / want - 1.0).abs() < 1e-4, "{got} against {want}");
 }
+
+#[test]
+fn area_source_is_seen_from_its_emitting_side_only() {
+    // Looking up at a downward-emitting source shows its luminance; from above, its back
+    // is invisible and the pixel sees nothing.
+    let light = r#"
+[[lights]]
+type = "area"
+corner = [-0.5, -0.5, 2]
+u = [0, 1, 0]
+v = [1, 0, 0]
+luminance_cdm2 = 1234
+"#;
+    let below = scene(&format!(
+        "{light}[camera]\nposition = [0, 0, 0]\nlook_at = [0, 0, 1]\nup = [0, 1, 0]\nfov_deg = 1\nresolution = [3, 3]\n"
+    ));
+    let above = scene(&format!("{light}{}", looking_down(3.0)));
+    for (s, want) in [(below, 1234.0), (above, 0.0)] {
+        let map = IndirectMap::zero(0);
+        let got = render_with(&s, &map, Backend::Embree, 1)
+            .image
+            .luminance_cdm2[4];
+        assert_eq!(got, want);
+    }
+}

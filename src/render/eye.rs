@@ -246,8 +246,10 @@ impl<'a> EyePass<'a> {
             s.shadow.clear();
             s.shadow_gain.clear();
             for k in 0..s.rays.len() {
-                let stream = ((first * spp) as u64) << 24 | k as u64;
-                let stream = stream ^ (depth as u64) << 58;
+                // (tile, ray in the queue, depth): unique below 2²⁸ tiles, 2³⁰ rays a
+                // queue and 64 bounces; `photon_stream` mixes it.
+                let tile = (first / TILE_PIXELS) as u64;
+                let stream = tile << 36 | (k as u64 & ((1 << 30) - 1)) << 6 | depth as u64;
                 self.shade(k, depth < self.camera.max_depth, stream, s, &mut sample_l);
             }
             if !s.shadow.is_empty() {
