@@ -4,12 +4,14 @@
 //! Data path (each module only uses the ones above it):
 //! `scene` (load and validate) → `accel` (ray casting backends) → `trace` (photon
 //! batches, epochs) → `tally` (receivers and triangle maps) → `stats` (equations of
-//! method.md, forecast, stop criteria) → `output` (summary.json and files).
+//! method.md, forecast, stop criteria) → `output` (summary.json and files) → `render`
+//! (the eye pass: images from a camera).
 
 pub mod accel;
 pub mod bench;
 pub mod error;
 pub mod output;
+pub mod render;
 pub mod rng;
 pub mod run;
 pub mod scene;

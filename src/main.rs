@@ -1,10 +1,11 @@
 //! The `luxtally` command line: parses, calls the library, prints one line on error.
 
 use clap::{Parser, Subcommand};
-use luxtally::accel::Backend;
+use luxtally::accel::{self, Backend, RayCaster};
 use luxtally::output::{summary, write_atomic};
-use luxtally::run::{run, Observer, RunOptions, RunState};
-use luxtally::scene::Estimator;
+use luxtally::render::{self, IndirectMap, MAP_FILE};
+use luxtally::run::{run_with, Observer, RunOptions, RunResult, RunState};
+use luxtally::scene::{Estimator, Scene};
 use luxtally::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -28,6 +29,9 @@ struct Cli {
 enum Command {
     /// Trace photons through a scene and write summary.json (and more) to --out.
     Run(RunArgs),
+    /// Photon pass (as `run`), then the eye pass from the scene's [camera]: render.exr,
+    /// render.png and render_false_colour.png in --out.
+    Render(RenderArgs),
     /// Print a scene's statistics: triangles, materials, lights, receivers, bounds.
     Info { scene: PathBuf },
     /// Rebuild report.html and the receivers' PNG previews from OUT_DIR/summary.json.
@@ -118,6 +122,19 @@ struct RunArgs {
     report_every: Option<f64>,
 }
 
+#[derive(clap::Args)]
+struct RenderArgs {
+    #[command(flatten)]
+    run: RunArgs,
+    /// Reuse the indirect map of a finished run in this directory (no photon pass; the
+    /// stop flags are then ignored). Images go to --out, else to this directory.
+    #[arg(long, value_name = "OUT_DIR")]
+    from: Option<PathBuf>,
+    /// Show the raw per-triangle indirect map (overrides the camera's `interpolate`).
+    #[arg(long)]
+    no_interpolation: bool,
+}
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
@@ -144,6 +161,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Run(args) => run_command(args),
+        Command::Render(args) => render_command(args),
         Command::Info { scene } => info_command(&scene),
         Command::Report { out_dir } => luxtally::output::rebuild_report(&out_dir),
         Command::BenchRays {
@@ -220,9 +238,9 @@ fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
-fn run_command(args: RunArgs) -> Result<()> {
-    let scene = luxtally::scene::load(&args.scene)?;
-    let mut options = RunOptions::from_scene(&scene);
+/// The run's options: the scene's `[simulation]`, overridden by the command line.
+fn run_options(args: &RunArgs, scene: &Scene) -> Result<RunOptions> {
+    let mut options = RunOptions::from_scene(scene);
     if args.photons.is_some() {
         options.photons = args.photons;
     }
@@ -233,7 +251,7 @@ fn run_command(args: RunArgs) -> Result<()> {
         options.target_error = args.target_error;
     }
     if args.target.is_some() {
-        options.target = args.target;
+        options.target = args.target.clone();
     }
     options.absolute |= args.absolute;
     if args.min_hits.is_some() {
@@ -262,11 +280,26 @@ fn run_command(args: RunArgs) -> Result<()> {
             ));
         }
     }
-    let out = args
-        .out
-        .unwrap_or_else(|| Path::new("out").join(&scene.name));
-    std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
+    Ok(options)
+}
 
+/// `--out`, or `out/<scene name>/`, created.
+fn out_dir(out: Option<&Path>, scene: &Scene) -> Result<PathBuf> {
+    let out = out.map_or_else(|| Path::new("out").join(&scene.name), Path::to_path_buf);
+    std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
+    Ok(out)
+}
+
+/// The photon pass shared by `run` and `render`: runs with all stop criteria and writes
+/// summary.json and the indirect map (`render --from` reads it) into `out`.
+fn photon_pass(
+    args: &RunArgs,
+    scene: &Scene,
+    options: &RunOptions,
+    caster: &dyn RayCaster,
+    setup: Instant,
+    out: &Path,
+) -> Result<RunResult> {
     let interrupt = Arc::new(AtomicBool::new(false));
     {
         let flag = interrupt.clone();
@@ -279,23 +312,89 @@ fn run_command(args: RunArgs) -> Result<()> {
     }
     let mut observer = CliObserver {
         quiet: args.quiet,
-        out: out.clone(),
+        out: out.to_path_buf(),
         last_save: Instant::now(),
         save_error: None,
         report_every_s: args.report_every,
         last_report: None,
     };
-    let result = run(&scene, &options, &interrupt, &mut observer)?;
+    let result = run_with(scene, options, caster, setup, &interrupt, &mut observer)?;
     if !args.quiet {
         eprintln!();
     }
-    let state = result.state(&scene, &options);
-    save_summary(&out, &state)?;
-    luxtally::output::write_run_files(&out, &state)?;
+    let state = result.state(scene, options);
+    save_summary(out, &state)?;
+    luxtally::output::write_run_files(out, &state)?;
     if let Some(e) = observer.save_error {
         return Err(e);
     }
-    let s = summary::build(&state);
+    IndirectMap::from_tallies(scene, &result.tallies, result.total_flux_lm)
+        .save(&out.join(MAP_FILE), scene)?;
+    Ok(result)
+}
+
+fn run_command(args: RunArgs) -> Result<()> {
+    let scene = luxtally::scene::load(&args.scene)?;
+    let options = run_options(&args, &scene)?;
+    let out = out_dir(args.out.as_deref(), &scene)?;
+    let setup = Instant::now();
+    let caster = accel::build(options.backend, &scene.geometry)?;
+    let result = photon_pass(&args, &scene, &options, caster.as_ref(), setup, &out)?;
+    print_run(&args, &result.state(&scene, &options), &out);
+    Ok(())
+}
+
+/// `render`: the photon pass (or a saved map with --from), then the eye pass.
+fn render_command(args: RenderArgs) -> Result<()> {
+    let mut scene = luxtally::scene::load(&args.run.scene)?;
+    let options = run_options(&args.run, &scene)?;
+    // Checked before the photon pass, which may be long.
+    let mut camera = render::camera_of(&scene)?.clone();
+    if args.no_interpolation {
+        camera.interpolate = false;
+    }
+    scene.camera = Some(camera.clone());
+    let out = out_dir(args.run.out.as_deref().or(args.from.as_deref()), &scene)?;
+    let setup = Instant::now();
+    let caster = accel::build(options.backend, &scene.geometry)?;
+    let map = match &args.from {
+        Some(dir) => IndirectMap::load(&dir.join(MAP_FILE), &scene)?,
+        None => {
+            let result = photon_pass(&args.run, &scene, &options, caster.as_ref(), setup, &out)?;
+            print_run(&args.run, &result.state(&scene, &options), &out);
+            IndirectMap::from_tallies(&scene, &result.tallies, result.total_flux_lm)
+        }
+    };
+    let r = render::render(
+        &scene,
+        &camera,
+        &map,
+        caster.as_ref(),
+        options.seed,
+        options.threads,
+    )?;
+    render::output::write_all(&r.image, &out)?;
+    if !args.run.quiet {
+        println!(
+            "render: {}×{} px, {} samples/px, {} eye rays + {} shadow rays in {:.2} s \
+             ({:.2} M eye rays/s, {:.2} s per megapixel, {} threads); images in {}",
+            r.image.width,
+            r.image.height,
+            camera.samples,
+            r.rays.eye,
+            r.rays.shadow,
+            r.elapsed_s,
+            r.eye_rays_per_s() / 1e6,
+            r.s_per_megapixel(),
+            options.threads,
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+fn print_run(args: &RunArgs, state: &RunState<'_>, out: &Path) {
+    let s = summary::build(state);
     if !args.quiet {
         println!(
             "{}: {} photons, {} rays in {:.2} s ({:.1} Mrays/s), stopped on {}; results in {}",
@@ -323,7 +422,6 @@ fn run_command(args: RunArgs) -> Result<()> {
             100.0 * s.global.rel_error.arithmetic
         );
     }
-    Ok(())
 }
 
 fn save_summary(out: &Path, state: &RunState<'_>) -> Result<()> {

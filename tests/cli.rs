@@ -185,7 +185,7 @@ fn obvhs_backend_without_the_feature_says_how_to_get_it() {
 #[test]
 fn ctrl_c_stops_at_an_epoch_boundary_with_complete_outputs() {
     let out_dir = temp_dir("interrupt");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_luxtally"))
+    let child = Command::new(env!("CARGO_BIN_EXE_luxtally"))
         .args([
             "run",
             "scenes/office.toml",

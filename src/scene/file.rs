@@ -21,6 +21,7 @@ pub struct SceneFile {
     #[serde(default)]
     pub receivers: Vec<toml::Value>,
     pub simulation: Option<toml::Value>,
+    pub camera: Option<toml::Value>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -115,6 +116,21 @@ pub struct SimulationFile {
     #[serde(default)]
     pub absolute: bool,
     pub min_hits: Option<u64>,
+}
+
+/// The `[camera]` table: the eye of `luxtally render`.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct CameraFile {
+    pub position: [f64; 3],
+    pub look_at: [f64; 3],
+    pub up: Option<[f64; 3]>,
+    pub fov_deg: f64,
+    pub resolution: [u32; 2],
+    pub samples: Option<u32>,
+    pub interpolate: Option<bool>,
+    pub area_light_samples: Option<u32>,
+    pub max_depth: Option<u32>,
 }
 
 /// Collapses a possibly multi-line message into one line.

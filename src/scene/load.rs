@@ -6,12 +6,12 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::file::{
-    self, LightFile, MaterialFile, ObjectFile, ReceiverFile, ScaleFile, SimulationFile,
+    self, CameraFile, LightFile, MaterialFile, ObjectFile, ReceiverFile, ScaleFile, SimulationFile,
 };
 use super::mesh_io;
 use super::shapes::{self, Mesh, Transform};
 use super::{
-    Estimator, Geometry, Light, LightKind, Material, Quantity, Receiver, Scene, Simulation,
+    Camera, Estimator, Geometry, Light, LightKind, Material, Quantity, Receiver, Scene, Simulation,
 };
 use crate::error::{Error, Result};
 use glam::DVec3;
@@ -101,6 +101,14 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         },
     };
 
+    let camera = match raw.camera {
+        Some(value) => Some(camera(
+            file::entry(value, origin, "camera")?,
+            &at("camera"),
+        )?),
+        None => None,
+    };
+
     Ok(Scene {
         name,
         path: PathBuf::from(origin),
@@ -109,6 +117,7 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         lights,
         receivers,
         simulation,
+        camera,
     })
 }
 
@@ -609,6 +618,64 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
         cells: r.cells,
         quantity,
         estimator,
+    })
+}
+
+/// Largest image side: beyond it an image is surely a typo (and a gigabyte of pixels).
+const MAX_RESOLUTION: u32 = 16_384;
+
+fn camera(c: CameraFile, at: &str) -> Result<Camera> {
+    let key = |k: &str| format!("{at}.{k}");
+    let position = vec3(c.position);
+    let look_at = vec3(c.look_at);
+    let view = (look_at - position)
+        .try_normalize()
+        .ok_or_else(|| Error::input(key("look_at"), "is the same point as position"))?;
+    let up = direction(c.up.unwrap_or([0.0, 0.0, 1.0]), at, "up")?;
+    if view.cross(up).length() < 1e-6 {
+        return Err(Error::input(key("up"), "is parallel to the view direction"));
+    }
+    if !(c.fov_deg > 0.0 && c.fov_deg < 180.0) {
+        return Err(Error::input(
+            key("fov_deg"),
+            format!("must be between 0 and 180 degrees, got {}", c.fov_deg),
+        ));
+    }
+    for (i, side) in c.resolution.iter().enumerate() {
+        if *side == 0 || *side > MAX_RESOLUTION {
+            return Err(Error::input(
+                key("resolution"),
+                format!(
+                    "{} must be 1 to {MAX_RESOLUTION} pixels, got {side}",
+                    ["width", "height"][i]
+                ),
+            ));
+        }
+    }
+    let at_least_one = |x: Option<u32>, k: &str, default: u32, max: u32| match x {
+        None => Ok(default),
+        Some(n) if n >= 1 && n <= max => Ok(n),
+        Some(n) => Err(Error::input(key(k), format!("must be 1 to {max}, got {n}"))),
+    };
+    Ok(Camera {
+        position,
+        look_at,
+        up,
+        fov_deg: c.fov_deg,
+        resolution: c.resolution,
+        samples: at_least_one(c.samples, "samples", 1, 65_536)?,
+        interpolate: c.interpolate.unwrap_or(true),
+        area_light_samples: at_least_one(c.area_light_samples, "area_light_samples", 8, 64)?,
+        max_depth: match c.max_depth {
+            None => 8,
+            Some(n) if n <= 64 => n,
+            Some(n) => {
+                return Err(Error::input(
+                    key("max_depth"),
+                    format!("must be 0 to 64, got {n}"),
+                ))
+            }
+        },
     })
 }
 

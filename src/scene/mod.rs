@@ -209,6 +209,30 @@ pub struct Scene {
     pub lights: Vec<Light>,
     pub receivers: Vec<Receiver>,
     pub simulation: Simulation,
+    /// The `[camera]` of `luxtally render`, if the file has one.
+    pub camera: Option<Camera>,
+}
+
+/// The eye of `luxtally render` (world coordinates). Validated: `look_at` differs from
+/// `position` and `up` is not along the view.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub position: DVec3,
+    pub look_at: DVec3,
+    /// Unit up vector.
+    pub up: DVec3,
+    /// Vertical field of view, degrees.
+    pub fov_deg: f64,
+    /// Width, height in pixels.
+    pub resolution: [u32; 2],
+    /// Eye rays per pixel (jittered on a grid).
+    pub samples: u32,
+    /// Indirect light interpolated across triangles (false: the raw per-triangle map).
+    pub interpolate: bool,
+    /// n: an area source is sampled on an n × n jittered grid per shading point.
+    pub area_light_samples: u32,
+    /// Specular bounces an eye ray may take.
+    pub max_depth: u32,
 }
 
 impl Geometry {

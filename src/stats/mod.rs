@@ -169,6 +169,32 @@ pub fn triangle_illuminance_lx(
     total_flux_lm * count as f64 / (photons as f64 * area_m2)
 }
 
+/// Illuminance of one face of triangle `k` in a map (`back_face`: the face behind the
+/// triangle's normal), from all photons, lx. The two faces of
+/// [`triangle_illuminance_lx`] kept apart: the eye sees one of them.
+pub fn triangle_face_illuminance_lx(
+    t: &Tallies,
+    kind: MapKind,
+    k: usize,
+    area_m2: f64,
+    total_flux_lm: f64,
+    back_face: bool,
+) -> f64 {
+    if t.photons == 0 || area_m2 <= 0.0 {
+        return 0.0;
+    }
+    let slots = &t.triangle_hits[k * CODES_PER_TRIANGLE..(k + 1) * CODES_PER_TRIANGLE];
+    let count: u64 = slots
+        .iter()
+        .enumerate()
+        .filter(|(slot, _)| {
+            (slot & 4 == 4) == back_face && (kind == MapKind::Total || slot & 2 == 2)
+        })
+        .map(|(_, &c)| c)
+        .sum();
+    total_flux_lm * count as f64 / (t.photons as f64 * area_m2)
+}
+
 /// Mean illuminance and odd/even error of a scene map (eqs. 4–5, σ = d/2).
 pub fn map_stats(t: &Tallies, kind: MapKind, areas_m2: &[f64], total_flux_lm: f64) -> MapStats {
     let total_area: f64 = areas_m2.iter().sum();

@@ -1,0 +1,531 @@
+//! The eye pass as a wavefront over SoA batches (pbrt-v4's stages): generate eye rays →
+//! intersect → at each hit add the indirect term and queue shadow rays for the direct
+//! term (method.md eqs. 1–2) and the specular continuations → trace the shadow rays →
+//! repeat on the continuations until none is left or the depth limit is reached.
+
+use super::map::IndirectField;
+use crate::accel::{HitBatch, RayBatch, RayCaster, NO_HIT};
+use crate::rng::photon_stream;
+use crate::scene::{Camera, LightKind, Material, Scene};
+use crate::trace::emit::spot_profile;
+use crate::trace::sampling::uniform;
+use crate::trace::scatter::{offset_origin, reflect, refract};
+use glam::{DVec3, Vec3};
+use rand_pcg::Pcg32;
+use std::f64::consts::PI;
+
+/// Pixels per work item: enough rays per batch for Embree's streams, small enough to
+/// share the image among threads.
+pub const TILE_PIXELS: usize = 256;
+
+/// Continuations whose weight falls below this are dropped (their luminance is at most
+/// this fraction of what they would show).
+const MIN_WEIGHT: f64 = 1e-5;
+
+/// Luminance image, row-major from the top-left pixel, cd/m².
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: usize,
+    pub height: usize,
+    pub luminance_cdm2: Vec<f64>,
+}
+
+/// Rays the eye pass cast.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RayCounts {
+    /// Primary and specular (closest-hit) rays.
+    pub eye: u64,
+    /// Shadow (occlusion) rays.
+    pub shadow: u64,
+}
+
+/// A light prepared for direct illumination, local frame.
+#[derive(Clone, Debug)]
+enum DirectLight {
+    Point {
+        position: DVec3,
+        intensity_cd: f64,
+    },
+    Spot {
+        position: DVec3,
+        axis: DVec3,
+        intensity_cd: f64,
+        cos_cone: f64,
+        cos_falloff: f64,
+    },
+    Directional {
+        /// Unit, the way the light travels.
+        direction: DVec3,
+        illuminance_lx: f64,
+    },
+    Area {
+        corner: DVec3,
+        u: DVec3,
+        v: DVec3,
+        normal: DVec3,
+        area_m2: f64,
+        luminance_cdm2: f64,
+    },
+}
+
+/// The pinhole camera in the local frame.
+#[derive(Clone, Copy, Debug)]
+struct Pinhole {
+    eye: DVec3,
+    forward: DVec3,
+    right: DVec3,
+    up: DVec3,
+    tan_half: f64,
+    aspect: f64,
+}
+
+impl Pinhole {
+    fn new(c: &Camera, origin: DVec3) -> Pinhole {
+        let forward = (c.look_at - c.position).normalize();
+        let right = forward.cross(c.up).normalize();
+        Pinhole {
+            eye: c.position - origin,
+            forward,
+            right,
+            up: right.cross(forward),
+            tan_half: (0.5 * c.fov_deg.to_radians()).tan(),
+            aspect: c.resolution[0] as f64 / c.resolution[1] as f64,
+        }
+    }
+
+    /// Unit direction through image position (x, y) in pixels from the top-left corner.
+    fn direction(&self, x: f64, y: f64, width: f64, height: f64) -> DVec3 {
+        let sx = (2.0 * x / width - 1.0) * self.tan_half * self.aspect;
+        let sy = (1.0 - 2.0 * y / height) * self.tan_half;
+        (self.forward + self.right * sx + self.up * sy).normalize()
+    }
+}
+
+/// Most samples per side of an area source at one shading point (48² shadow rays).
+pub const MAX_AREA_SAMPLES: usize = 48;
+
+/// Samples per side n of an area source of diagonal `diagonal_m` seen from `distance_m`
+/// (to its centre): the camera's `area_light_samples` n₀ from a diagonal's distance on,
+/// growing as n₀·diagonal/distance nearer, up to [`MAX_AREA_SAMPLES`]. Jittered strata
+/// make the noise fall as 1/n² and grow about as (diagonal/distance)^1.5, so this keeps
+/// the direct term's noise per shading point near its far-field value (≈ 0.25 % for
+/// n₀ = 8; docs/render.md).
+pub fn area_samples_per_side(n0: u32, diagonal_m: f64, distance_m: f64) -> usize {
+    let n0 = n0 as usize;
+    let grown = (n0 as f64 * diagonal_m / distance_m.max(1e-9)).ceil();
+    if grown.is_finite() && grown > n0 as f64 {
+        (grown as usize).min(MAX_AREA_SAMPLES.max(n0))
+    } else {
+        n0
+    }
+}
+
+/// Everything the eye pass reads, prepared once.
+pub struct EyePass<'a> {
+    caster: &'a dyn RayCaster,
+    scene: &'a Scene,
+    camera: &'a Camera,
+    field: &'a IndirectField,
+    lights: Vec<DirectLight>,
+    pinhole: Pinhole,
+    scene_scale: f32,
+    seed: u64,
+}
+
+/// Reused buffers of one worker.
+#[derive(Default)]
+pub struct Scratch {
+    rays: RayBatch,
+    hits: HitBatch,
+    /// Per ray: (sample within tile, weight).
+    paths: Vec<(u32, f64)>,
+    next_rays: RayBatch,
+    next_paths: Vec<(u32, f64)>,
+    shadow: RayBatch,
+    /// Per shadow ray: (sample within tile, luminance it adds if unoccluded).
+    shadow_gain: Vec<(u32, f64)>,
+    occluded: Vec<bool>,
+}
+
+impl<'a> EyePass<'a> {
+    pub fn new(
+        scene: &'a Scene,
+        camera: &'a Camera,
+        field: &'a IndirectField,
+        caster: &'a dyn RayCaster,
+        seed: u64,
+    ) -> EyePass<'a> {
+        let origin = scene.geometry.origin;
+        let lights = scene
+            .lights
+            .iter()
+            .map(|l| match l.kind {
+                LightKind::Point {
+                    position,
+                    intensity_cd,
+                } => DirectLight::Point {
+                    position: position - origin,
+                    intensity_cd,
+                },
+                LightKind::Spot {
+                    position,
+                    direction,
+                    intensity_cd,
+                    cone_deg,
+                    falloff_deg,
+                } => DirectLight::Spot {
+                    position: position - origin,
+                    axis: direction.normalize(),
+                    intensity_cd,
+                    cos_cone: cone_deg.to_radians().cos(),
+                    cos_falloff: falloff_deg.to_radians().cos(),
+                },
+                LightKind::Directional {
+                    direction,
+                    illuminance_lx,
+                } => DirectLight::Directional {
+                    direction: direction.normalize(),
+                    illuminance_lx,
+                },
+                LightKind::Area {
+                    corner,
+                    u,
+                    v,
+                    luminance_cdm2,
+                } => DirectLight::Area {
+                    corner: corner - origin,
+                    u,
+                    v,
+                    normal: u.cross(v).normalize(),
+                    area_m2: u.cross(v).length(),
+                    luminance_cdm2,
+                },
+            })
+            .collect();
+        let scene_scale = scene
+            .geometry
+            .vertices
+            .iter()
+            .map(|v| v.abs().max_element())
+            .fold(f32::MIN_POSITIVE, f32::max);
+        EyePass {
+            caster,
+            scene,
+            camera,
+            field,
+            lights,
+            pinhole: Pinhole::new(camera, origin),
+            scene_scale,
+            seed,
+        }
+    }
+
+    pub fn pixel_count(&self) -> usize {
+        self.camera.resolution[0] as usize * self.camera.resolution[1] as usize
+    }
+
+    /// Luminance of the pixels `first..first + count` (raster order) and the rays cast.
+    pub fn render_tile(
+        &self,
+        first: usize,
+        count: usize,
+        s: &mut Scratch,
+    ) -> (Vec<f64>, RayCounts) {
+        let spp = self.camera.samples as usize;
+        let mut sample_l = vec![0.0f64; count * spp];
+        let mut counts = RayCounts::default();
+        self.generate(first, count, s);
+        for depth in 0..=self.camera.max_depth {
+            if s.rays.is_empty() {
+                break;
+            }
+            self.caster.intersect(&s.rays, &mut s.hits);
+            counts.eye += s.rays.len() as u64;
+            s.next_rays.clear();
+            s.next_paths.clear();
+            s.shadow.clear();
+            s.shadow_gain.clear();
+            for k in 0..s.rays.len() {
+                // (tile, ray in the queue, depth): unique below 2²⁸ tiles, 2³⁰ rays a
+                // queue and 64 bounces; `photon_stream` mixes it.
+                let tile = (first / TILE_PIXELS) as u64;
+                let stream = tile << 36 | (k as u64 & ((1 << 30) - 1)) << 6 | depth as u64;
+                self.shade(k, depth < self.camera.max_depth, stream, s, &mut sample_l);
+            }
+            if !s.shadow.is_empty() {
+                self.caster.occluded(&s.shadow, &mut s.occluded);
+                counts.shadow += s.shadow.len() as u64;
+                for (&(sample, gain), &blocked) in s.shadow_gain.iter().zip(&s.occluded) {
+                    if !blocked {
+                        sample_l[sample as usize] += gain;
+                    }
+                }
+            }
+            std::mem::swap(&mut s.rays, &mut s.next_rays);
+            std::mem::swap(&mut s.paths, &mut s.next_paths);
+        }
+        let pixels = sample_l
+            .chunks_exact(spp)
+            .map(|c| c.iter().sum::<f64>() / spp as f64)
+            .collect();
+        (pixels, counts)
+    }
+
+    /// Primary rays: one through the pixel centre with one sample per pixel, else
+    /// jittered on a grid of ⌈√n⌉ columns (stratified), from the pixel's own stream.
+    fn generate(&self, first: usize, count: usize, s: &mut Scratch) {
+        let [w, h] = self.camera.resolution.map(|x| x as f64);
+        let spp = self.camera.samples as usize;
+        let cols = (spp as f64).sqrt().ceil() as usize;
+        let rows = spp.div_ceil(cols);
+        s.rays.clear();
+        s.paths.clear();
+        let eye = self.pinhole.eye.as_vec3().to_array();
+        for p in 0..count {
+            let pixel = first + p;
+            let (px, py) = ((pixel % w as usize) as f64, (pixel / w as usize) as f64);
+            let mut rng: Pcg32 = photon_stream(self.seed, pixel as u64);
+            for k in 0..spp {
+                let (jx, jy) = if spp == 1 {
+                    (0.5, 0.5)
+                } else {
+                    (
+                        ((k % cols) as f64 + uniform(&mut rng)) / cols as f64,
+                        ((k / cols) as f64 + uniform(&mut rng)) / rows as f64,
+                    )
+                };
+                let d = self.pinhole.direction(px + jx, py + jy, w, h);
+                s.rays.push(eye, d.as_vec3().to_array(), 0.0, f32::INFINITY);
+                s.paths.push(((p * spp + k) as u32, 1.0));
+            }
+        }
+    }
+
+    /// One eye ray's hit: emitters seen directly, the diffuse part (indirect now, direct
+    /// through queued shadow rays), and the specular continuations.
+    fn shade(
+        &self,
+        k: usize,
+        may_continue: bool,
+        stream: u64,
+        s: &mut Scratch,
+        sample_l: &mut [f64],
+    ) {
+        let (sample, weight) = s.paths[k];
+        let o = DVec3::new(
+            s.rays.ox[k] as f64,
+            s.rays.oy[k] as f64,
+            s.rays.oz[k] as f64,
+        );
+        let dir = DVec3::new(
+            s.rays.dx[k] as f64,
+            s.rays.dy[k] as f64,
+            s.rays.dz[k] as f64,
+        )
+        .normalize();
+        let t_hit = s.hits.t[k] as f64;
+        sample_l[sample as usize] += weight * self.area_light_seen(o, dir, t_hit);
+        let tri = s.hits.tri[k];
+        if tri == NO_HIT {
+            return;
+        }
+        let g = &self.scene.geometry;
+        let t = tri as usize;
+        let m: &Material = &self.scene.materials[g.material[t] as usize];
+        let normal = g.normal[t];
+        let n = normal.as_dvec3();
+        let back = dir.dot(n) > 0.0;
+        // Normal on the eye's side.
+        let facing = if back { -n } else { n };
+        let [a, b, c] = g.triangles[t].map(|i| g.vertices[i as usize]);
+        let (u, v) = (s.hits.u[k], s.hits.v[k]);
+        let p = a + (b - a) * u + (c - a) * v;
+
+        if m.reflectance > 0.0 || m.transmittance > 0.0 {
+            let e_seen = self.field.illuminance_lx(t, back, u, v);
+            let e_other = self.field.illuminance_lx(t, !back, u, v);
+            sample_l[sample as usize] +=
+                weight * (m.reflectance * e_seen + m.transmittance * e_other) / PI;
+            self.queue_direct(p, facing, m, (weight, sample, stream), s);
+        }
+        if !may_continue {
+            return;
+        }
+        let push = |s: &mut Scratch, d: DVec3, w: f64, leave: DVec3| {
+            if w < MIN_WEIGHT {
+                return;
+            }
+            let origin = offset_origin(p, leave.as_vec3(), self.scene_scale);
+            s.next_rays.push(
+                origin.to_array(),
+                d.as_vec3().to_array(),
+                0.0,
+                f32::INFINITY,
+            );
+            s.next_paths.push((sample, w));
+        };
+        if m.specular_reflectance > 0.0 {
+            push(
+                s,
+                reflect(dir, facing),
+                weight * m.specular_reflectance,
+                facing,
+            );
+        }
+        if m.specular_transmittance > 0.0 {
+            // The dielectric's outside is the side the normal points to.
+            let eta = if back { m.ior } else { 1.0 / m.ior };
+            let w = weight * m.specular_transmittance;
+            match refract(dir, facing, eta) {
+                Some((refracted, fresnel)) => {
+                    push(s, reflect(dir, facing), w * fresnel, facing);
+                    push(s, refracted, w * (1.0 - fresnel), -facing);
+                }
+                None => push(s, reflect(dir, facing), w, facing),
+            }
+        }
+    }
+
+    /// Queues the shadow rays of the direct term at `p` (eqs. 1–2): each carries the
+    /// luminance it adds, ρ/π·E on the eye's side or τ/π·E from the other side.
+    fn queue_direct(
+        &self,
+        p: Vec3,
+        facing: DVec3,
+        m: &Material,
+        (weight, sample, stream): (f64, u32, u64),
+        s: &mut Scratch,
+    ) {
+        let pd = p.as_dvec3();
+        // Luminance per lux arriving from direction `to_light` (unit).
+        let gain = |to_light: DVec3| -> (f64, DVec3) {
+            let cos = to_light.dot(facing);
+            if cos >= 0.0 {
+                (weight * m.reflectance * cos / PI, facing)
+            } else {
+                (weight * m.transmittance * -cos / PI, -facing)
+            }
+        };
+        let push = |s: &mut Scratch, leave: DVec3, to: DVec3, tfar: f32, l: f64| {
+            if l <= 0.0 {
+                return;
+            }
+            let origin = offset_origin(p, leave.as_vec3(), self.scene_scale);
+            s.shadow
+                .push(origin.to_array(), to.as_vec3().to_array(), 0.0, tfar);
+            s.shadow_gain.push((sample, l));
+        };
+        // Shadow rays towards a point stop just short of it: a source sitting on a
+        // surface is not shadowed by that surface.
+        const SHORT: f32 = 1.0 - 1e-5;
+        for light in &self.lights {
+            match *light {
+                DirectLight::Point {
+                    position,
+                    intensity_cd,
+                } => {
+                    let to = position - pd;
+                    let d2 = to.length_squared();
+                    let (g, leave) = gain(to / d2.sqrt());
+                    push(s, leave, to, SHORT, g * intensity_cd / d2);
+                }
+                DirectLight::Spot {
+                    position,
+                    axis,
+                    intensity_cd,
+                    cos_cone,
+                    cos_falloff,
+                } => {
+                    let to = position - pd;
+                    let d2 = to.length_squared();
+                    let w = to / d2.sqrt();
+                    let i = intensity_cd * spot_profile(-w.dot(axis), cos_cone, cos_falloff);
+                    let (g, leave) = gain(w);
+                    push(s, leave, to, SHORT, g * i / d2);
+                }
+                DirectLight::Directional {
+                    direction,
+                    illuminance_lx,
+                } => {
+                    let (g, leave) = gain(-direction);
+                    push(s, leave, -direction, f32::INFINITY, g * illuminance_lx);
+                }
+                DirectLight::Area {
+                    corner,
+                    u,
+                    v,
+                    normal,
+                    area_m2,
+                    luminance_cdm2,
+                } => {
+                    // n × n jittered strata, from a stream of (tile, depth, ray): the
+                    // same whatever the threads or the backend.
+                    let n = area_samples_per_side(
+                        self.camera.area_light_samples,
+                        (u + v).length(),
+                        (corner + 0.5 * (u + v) - pd).length(),
+                    );
+                    let mut rng = photon_stream(self.seed ^ 0xa5a5_a5a5_0000_0000, stream);
+                    let da = area_m2 / (n * n) as f64;
+                    for i in 0..n {
+                        for j in 0..n {
+                            let q = corner
+                                + u * ((i as f64 + uniform(&mut rng)) / n as f64)
+                                + v * ((j as f64 + uniform(&mut rng)) / n as f64);
+                            let to = q - pd;
+                            let d2 = to.length_squared();
+                            let w = to / d2.sqrt();
+                            let cos_light = -w.dot(normal);
+                            if cos_light <= 0.0 {
+                                continue;
+                            }
+                            let (g, leave) = gain(w);
+                            push(
+                                s,
+                                leave,
+                                to,
+                                SHORT,
+                                g * luminance_cdm2 * cos_light * da / d2,
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Luminance of an area source the ray meets from its emitting side before `t_hit`
+    /// (the sources are not scene geometry; the eye still sees them).
+    fn area_light_seen(&self, o: DVec3, dir: DVec3, t_hit: f64) -> f64 {
+        let mut l = 0.0;
+        for light in &self.lights {
+            if let DirectLight::Area {
+                corner,
+                u,
+                v,
+                normal,
+                luminance_cdm2,
+                ..
+            } = *light
+            {
+                let cos = dir.dot(normal);
+                if cos >= 0.0 {
+                    continue;
+                }
+                let t = (corner - o).dot(normal) / cos;
+                if !(t > 0.0 && t < t_hit) {
+                    continue;
+                }
+                // Coordinates of the hit in the (u, v) parallelogram.
+                let r = o + dir * t - corner;
+                let uv = u.cross(v);
+                let a = r.cross(v).dot(uv) / uv.length_squared();
+                let b = u.cross(r).dot(uv) / uv.length_squared();
+                if (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) {
+                    l += luminance_cdm2;
+                }
+            }
+        }
+        l
+    }
+}

@@ -1,0 +1,222 @@
+//! The secondary (indirect) illumination map the eye pass reads: per triangle face, from
+//! the photon pass's tallies; saved as `indirect_map.bin` so `render --from` can reuse a
+//! finished run; and its smooth interpolation across triangles.
+
+use crate::scene::Scene;
+use crate::stats::{triangle_face_illuminance_lx, MapKind};
+use crate::tally::Tallies;
+use crate::{Error, Result};
+use std::path::Path;
+
+/// File name of the saved map in an output directory.
+pub const MAP_FILE: &str = "indirect_map.bin";
+const MAGIC: &[u8; 8] = b"LUXIMAP1";
+const HEADER_BYTES: usize = 8 + 3 * 8;
+
+/// Indirect illuminance (lx) of both faces of every triangle: `[front, back]`, front
+/// being the side the triangle's normal points to.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IndirectMap {
+    pub face_lx: Vec<[f64; 2]>,
+    /// Photons of the run the map comes from.
+    pub photons: u64,
+}
+
+impl IndirectMap {
+    /// The map of a finished photon pass.
+    pub fn from_tallies(scene: &Scene, tallies: &Tallies, total_flux_lm: f64) -> IndirectMap {
+        let areas = &scene.geometry.area_m2;
+        let face = |k: usize, back: bool| {
+            triangle_face_illuminance_lx(
+                tallies,
+                MapKind::Indirect,
+                k,
+                areas[k],
+                total_flux_lm,
+                back,
+            )
+        };
+        IndirectMap {
+            face_lx: (0..areas.len())
+                .map(|k| [face(k, false), face(k, true)])
+                .collect(),
+            photons: tallies.photons,
+        }
+    }
+
+    /// A map of zeros (direct light only).
+    pub fn zero(triangles: usize) -> IndirectMap {
+        IndirectMap {
+            face_lx: vec![[0.0; 2]; triangles],
+            photons: 0,
+        }
+    }
+
+    /// Writes the map: magic, then little-endian u64 triangle count, scene fingerprint
+    /// and photons, then f64 front and back illuminance per triangle.
+    pub fn save(&self, path: &Path, scene: &Scene) -> Result<()> {
+        let mut bytes = Vec::with_capacity(HEADER_BYTES + 16 * self.face_lx.len());
+        bytes.extend_from_slice(MAGIC);
+        for x in [
+            self.face_lx.len() as u64,
+            scene_fingerprint(scene),
+            self.photons,
+        ] {
+            bytes.extend_from_slice(&x.to_le_bytes());
+        }
+        for face in &self.face_lx {
+            for e in face {
+                bytes.extend_from_slice(&e.to_le_bytes());
+            }
+        }
+        crate::output::write_atomic(path, &bytes)
+    }
+
+    /// Reads a map saved for `scene`; a map of another scene (other geometry, materials
+    /// or lights) is an error.
+    pub fn load(path: &Path, scene: &Scene) -> Result<IndirectMap> {
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let bad = |message: &str| Error::input(path.display().to_string(), message.to_string());
+        if bytes.len() < HEADER_BYTES || &bytes[..8] != MAGIC {
+            return Err(bad("not a luxtally indirect map"));
+        }
+        let word = |i: usize| {
+            let mut b = [0u8; 8];
+            b.copy_from_slice(&bytes[8 + 8 * i..16 + 8 * i]);
+            u64::from_le_bytes(b)
+        };
+        let (triangles, fingerprint, photons) = (word(0), word(1), word(2));
+        if triangles != scene.geometry.triangle_count() as u64
+            || fingerprint != scene_fingerprint(scene)
+        {
+            return Err(bad(&format!(
+                "was made for another scene (or the scene `{}` changed since): run the photon pass again",
+                scene.path.display()
+            )));
+        }
+        if bytes.len() != HEADER_BYTES + 16 * triangles as usize {
+            return Err(bad("truncated indirect map"));
+        }
+        let value = |i: usize| {
+            let mut b = [0u8; 8];
+            let at = HEADER_BYTES + 8 * i;
+            b.copy_from_slice(&bytes[at..at + 8]);
+            f64::from_le_bytes(b)
+        };
+        Ok(IndirectMap {
+            face_lx: (0..triangles as usize)
+                .map(|k| [value(2 * k), value(2 * k + 1)])
+                .collect(),
+            photons,
+        })
+    }
+}
+
+/// FNV-1a over what the map depends on: geometry (vertices, triangles, their materials),
+/// materials and lights. The camera is left out: it does not change the map.
+pub fn scene_fingerprint(scene: &Scene) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for b in bytes {
+            h ^= *b as u64;
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    let g = &scene.geometry;
+    for x in g.origin.to_array() {
+        eat(&x.to_le_bytes());
+    }
+    for v in &g.vertices {
+        for x in v.to_array() {
+            eat(&x.to_le_bytes());
+        }
+    }
+    for (t, m) in g.triangles.iter().zip(&g.material) {
+        for i in t {
+            eat(&i.to_le_bytes());
+        }
+        eat(&m.to_le_bytes());
+    }
+    eat(format!("{:?}", scene.materials).as_bytes());
+    eat(format!("{:?}", scene.lights).as_bytes());
+    h
+}
+
+/// Triangles whose normals differ by more than this are not smoothed together: the
+/// faces of a box stay apart, a tessellated sphere is smooth.
+const CREASE_COS: f32 = 0.866; // 30°
+
+/// The indirect illuminance at any point of a triangle face: barycentric interpolation
+/// of corner values, or the triangle's own value when interpolation is off.
+pub struct IndirectField {
+    /// Per triangle, per corner, [front, back] lx.
+    corner_lx: Vec<[[f64; 2]; 3]>,
+}
+
+impl IndirectField {
+    /// Corner values are the area-weighted mean of the face values of the triangles
+    /// sharing the vertex and lying within the crease angle (same side of each, as the
+    /// normals agree); without `interpolate` every corner holds the triangle's value.
+    pub fn new(scene: &Scene, map: &IndirectMap, interpolate: bool) -> IndirectField {
+        let g = &scene.geometry;
+        if !interpolate {
+            return IndirectField {
+                corner_lx: map.face_lx.iter().map(|f| [*f; 3]).collect(),
+            };
+        }
+        // Vertex → triangles (CSR).
+        let mut start = vec![0usize; g.vertices.len() + 1];
+        for t in &g.triangles {
+            for &i in t {
+                start[i as usize + 1] += 1;
+            }
+        }
+        for i in 0..g.vertices.len() {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut adjacent = vec![0u32; start[g.vertices.len()]];
+        for (k, t) in g.triangles.iter().enumerate() {
+            for &i in t {
+                adjacent[fill[i as usize]] = k as u32;
+                fill[i as usize] += 1;
+            }
+        }
+        let corner_lx = g
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(k, t)| {
+                t.map(|i| {
+                    let (mut sum, mut area) = ([0.0f64; 2], 0.0f64);
+                    for &j in &adjacent[start[i as usize]..start[i as usize + 1]] {
+                        let j = j as usize;
+                        if g.normal[j].dot(g.normal[k]) < CREASE_COS {
+                            continue;
+                        }
+                        let a = g.area_m2[j];
+                        sum[0] += a * map.face_lx[j][0];
+                        sum[1] += a * map.face_lx[j][1];
+                        area += a;
+                    }
+                    if area > 0.0 {
+                        [sum[0] / area, sum[1] / area]
+                    } else {
+                        map.face_lx[k]
+                    }
+                })
+            })
+            .collect();
+        IndirectField { corner_lx }
+    }
+
+    /// Indirect illuminance (lx) on face `back` of triangle `k` at barycentrics (u, v)
+    /// (weights of corners 1 and 2).
+    #[inline]
+    pub fn illuminance_lx(&self, k: usize, back: bool, u: f32, v: f32) -> f64 {
+        let c = &self.corner_lx[k];
+        let s = back as usize;
+        let (u, v) = (u as f64, v as f64);
+        (1.0 - u - v) * c[0][s] + u * c[1][s] + v * c[2][s]
+    }
+}
