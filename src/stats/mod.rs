@@ -137,6 +137,23 @@ pub enum MapKind {
     Indirect,
 }
 
+/// Photon hits of one triangle in a map, from odd and from even photons (both faces).
+#[inline]
+fn parity_counts(slots: &[u64], kind: MapKind) -> (u64, u64) {
+    let (mut odd, mut even) = (0, 0);
+    for (slot, &c) in slots.iter().enumerate() {
+        if kind == MapKind::Indirect && slot & 2 == 0 {
+            continue;
+        }
+        if slot & 1 == 1 {
+            odd += c;
+        } else {
+            even += c;
+        }
+    }
+    (odd, even)
+}
+
 /// Illuminance of triangle `k` in a map: flux of both faces over the geometric area, from
 /// photons of the given parities (`None`: all), lx.
 pub fn triangle_illuminance_lx(
@@ -149,20 +166,12 @@ pub fn triangle_illuminance_lx(
 ) -> f64 {
     let (n_odd, n_even) = t.odd_even_photons();
     let slots = &t.triangle_hits[k * CODES_PER_TRIANGLE..(k + 1) * CODES_PER_TRIANGLE];
-    let (mut count, mut photons) = (0u64, 0u64);
-    for (slot, &c) in slots.iter().enumerate() {
-        let odd = slot & 1 == 1;
-        let indirect = slot & 2 == 2;
-        if (kind == MapKind::Indirect && !indirect) || parity.is_some_and(|p| p != odd) {
-            continue;
-        }
-        count += c;
-    }
-    for (odd, n) in [(true, n_odd), (false, n_even)] {
-        if parity.is_none_or(|p| p == odd) {
-            photons += n;
-        }
-    }
+    let (odd, even) = parity_counts(slots, kind);
+    let (count, photons) = match parity {
+        None => (odd + even, n_odd + n_even),
+        Some(true) => (odd, n_odd),
+        Some(false) => (even, n_even),
+    };
     if photons == 0 {
         return 0.0;
     }
@@ -208,16 +217,18 @@ pub fn map_stats(t: &Tallies, kind: MapKind, areas_m2: &[f64], total_flux_lm: f6
             ..MapStats::default()
         };
     }
+    // One pass over the counts: flux per photon of all photons, of odd and of even ones.
+    let per_photon = total_flux_lm / t.photons as f64;
+    let per_odd = if n_odd > 0 { total_flux_lm / n_odd as f64 } else { 0.0 };
+    let per_even = if n_even > 0 { total_flux_lm / n_even as f64 } else { 0.0 };
     let (mut sum_e, mut sum_e2, mut sum_d2) = (0.0, 0.0, 0.0);
-    for (k, &a) in areas_m2.iter().enumerate() {
-        let e = triangle_illuminance_lx(t, kind, k, a, total_flux_lm, None);
+    for (&a, slots) in areas_m2.iter().zip(t.triangle_hits.chunks_exact(CODES_PER_TRIANGLE)) {
+        let (odd, even) = parity_counts(slots, kind);
+        let e = per_photon * (odd + even) as f64 / a;
         sum_e += a * e;
         sum_e2 += a * e * e;
-        if n_odd > 0 && n_even > 0 {
-            let e_odd = triangle_illuminance_lx(t, kind, k, a, total_flux_lm, Some(true));
-            let e_even = triangle_illuminance_lx(t, kind, k, a, total_flux_lm, Some(false));
-            sum_d2 += a * (e_odd - e_even).powi(2);
-        }
+        let d = (per_odd * odd as f64 - per_even * even as f64) / a;
+        sum_d2 += a * d * d;
     }
     let mean_lx = sum_e / total_area;
     let quadratic_lx = (sum_e2 / total_area).sqrt();
