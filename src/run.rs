@@ -405,9 +405,6 @@ fn next_epoch_photons(
         photons = photons.min(to_goal.max(0.01 * done as f64));
     }
     let chunks = (photons / CHUNK_PHOTONS as f64).ceil() as u64;
-    chunks.clamp(1, 1 << 16).max(if goal_photons.is_some() {
-        1
-    } else {
-        threads as u64
-    }) * CHUNK_PHOTONS
+    // At least a chunk per thread: a smaller epoch leaves threads idle.
+    chunks.clamp(threads as u64, 1 << 16) * CHUNK_PHOTONS
 }
