@@ -14,6 +14,12 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
+thread_local! {
+    /// A worker thread's batch buffers: reused by every chunk it traces (their contents
+    /// never affect results).
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
+}
+
 /// Photons when neither the command line nor the scene says how many, and no other
 /// criterion can end the run.
 pub const DEFAULT_PHOTONS: u64 = 1_000_000;
@@ -215,6 +221,9 @@ pub fn run_with(
     let mut latest_forecast = None;
     let setup_s = setup.elapsed().as_secs_f64();
 
+    // Chunk tallies are reused from epoch to epoch (in chunk order, so the merge order
+    // never changes); each worker thread keeps its own scratch buffers.
+    let mut buffers: Vec<ChunkTally> = Vec::new();
     let start = Instant::now();
     let mut epoch_photons = CHUNK_PHOTONS * threads as u64;
     let stop_reason = loop {
@@ -229,18 +238,23 @@ pub fn run_with(
                 )
             })
             .collect();
-        let results: Vec<ChunkTally> = pool.install(|| {
+        if buffers.len() < chunks.len() {
+            buffers.resize_with(chunks.len(), ChunkTally::default);
+        }
+        let results = &mut buffers[..chunks.len()];
+        pool.install(|| {
             chunks
                 .par_iter()
-                .map_init(Scratch::default, |scratch, &(first, n)| {
-                    tracer.trace_chunk(first, n, scratch)
+                .zip(results.par_iter_mut())
+                .for_each(|(&(first, n), tally)| {
+                    SCRATCH.with_borrow_mut(|scratch| {
+                        tracer.trace_chunk_into(first, n, scratch, tally)
+                    })
                 })
-                .collect()
         });
         for (chunk, &(_, n)) in results.iter().zip(&chunks) {
             tallies.accumulate(chunk, n as u64);
         }
-        drop(results);
         let elapsed_s = start.elapsed().as_secs_f64();
         let stats_start = Instant::now();
 

@@ -225,28 +225,88 @@ fn receiver_no_photon_reaches_reads_zero_with_unknown_error() {
     assert_all_finite(&s);
 }
 
-#[test]
-fn track_and_next_event_agree_on_every_office_desk_cell() {
-    // The cross-check that no path is missed or counted twice: the analog estimator
-    // and next-event estimation with deterministic direct light, cell by cell.
-    let scene = office();
+/// The cross-check that no path is missed or counted twice: the analog estimator and
+/// next-event estimation (deterministic direct light, connections, near-zone and
+/// specular crossings) agree cell by cell within their combined σ.
+fn assert_estimators_agree(
+    scene: &luxtally::scene::Scene,
+    receiver: &str,
+    track_photons: u64,
+    next_event_photons: u64,
+) {
     let with = |estimator, photons| luxtally::run::RunOptions {
         estimator: Some(estimator),
-        ..options(&scene, photons, 2, Backend::Embree)
+        ..options(scene, photons, 2, Backend::Embree)
     };
-    let track = run_options(&scene, &with(luxtally::scene::Estimator::Track, 10_000_000));
-    let next = run_options(
-        &scene,
-        &with(luxtally::scene::Estimator::NextEvent, 1_000_000),
+    let track = run_options(
+        scene,
+        &with(luxtally::scene::Estimator::Track, track_photons),
     );
-    let (a, b) = (&track.receivers["desk"], &next.receivers["desk"]);
+    let next = run_options(
+        scene,
+        &with(luxtally::scene::Estimator::NextEvent, next_event_photons),
+    );
+    let (a, b) = (&track.receivers[receiver], &next.receivers[receiver]);
     assert_eq!((a.estimator, b.estimator), ("track", "next_event"));
     let z: Vec<f64> = (0..a.values.len())
         .map(|k| (a.values[k] - b.values[k]) / a.sigma[k].hypot(b.sigma[k]))
         .collect();
     let r = rms(&z);
-    eprintln!("track vs next_event: z RMS {r:.3} over {} cells", z.len());
+    eprintln!(
+        "{receiver}: track vs next_event: z RMS {r:.3} over {} cells",
+        z.len()
+    );
     assert!((0.8..=1.25).contains(&r), "z RMS {r}");
+}
+
+#[test]
+fn track_and_next_event_agree_on_every_office_desk_cell() {
+    assert_estimators_agree(&office(), "desk", 10_000_000, 1_000_000);
+}
+
+#[test]
+fn track_and_next_event_agree_beside_walls_and_through_glass() {
+    // A floor receiver touching the walls (their lower parts are in its near zone), a
+    // partly glossy wall (diffuse and mirror lobes at once) and a glass cube.
+    let scene = common::scene(
+        r#"
+        [materials.wall]
+        reflectance = 0.5
+        [materials.satin]
+        reflectance = 0.3
+        specular_reflectance = 0.3
+        [materials.glass]
+        specular_transmittance = 0.95
+        ior = 1.5
+        [[objects]]
+        shape = "box"
+        min = [0, 0, 0]
+        max = [2, 2, 2]
+        material = "wall"
+        [[objects]]
+        shape = "rect"
+        corner = [1.999, 0, 0]
+        u = [0, 0, 2]
+        v = [0, 2, 0]
+        material = "satin"
+        [[objects]]
+        shape = "box"
+        min = [0.3, 0.3, 0.4]
+        max = [0.8, 0.8, 0.9]
+        material = "glass"
+        [[lights]]
+        type = "point"
+        position = [1.2, 1.1, 1.7]
+        intensity_cd = 100
+        [[receivers]]
+        name = "floor"
+        corner = [0, 0, 0.002]
+        u = [2, 0, 0]
+        v = [0, 2, 0]
+        cells = [16, 16]
+        "#,
+    );
+    assert_estimators_agree(&scene, "floor", 6_000_000, 1_500_000);
 }
 
 #[test]

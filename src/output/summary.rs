@@ -3,6 +3,7 @@
 use crate::run::RunState;
 use crate::scene::Quantity;
 use crate::stats::forecast::HistoryPoint;
+use crate::stats::stop::Target;
 use crate::stats::{
     figure_of_merit, map_stats, mean_illuminance_sigma_lx, mean_illuminance_vov, receiver_stats,
     reliability, variance_of_variance, Averaged, MapKind, Reliability,
@@ -195,23 +196,32 @@ pub fn build(state: &RunState<'_>) -> Summary {
     }
 }
 
-/// The target's VOV: the largest among its cells that scored, or the scene mean's.
+/// The target's VOV: for a block (whose error is its worst cell's), the largest among
+/// its cells that scored; for a whole receiver (whose error is the RMS over its cells),
+/// the 90th percentile, so a few sparse cells at the receiver's edge do not mark the
+/// mean error unreliable; for the scene map, the VOV of its mean.
 fn target_vov(state: &RunState<'_>) -> f64 {
     let t = state.tallies;
     let receivers = &state.scene.receivers;
-    match state.target.receiver() {
-        None => mean_illuminance_vov(t),
-        Some(r) => {
-            let cells = t.receiver_cells(receivers, r);
-            state
-                .target
-                .cells(receivers)
-                .iter()
-                .map(|&c| &cells[c])
-                .filter(|c| c.hits > 0)
-                .map(|c| variance_of_variance(c.moments.map(|m| m.value()), t.photons))
-                .reduce(f64::max)
-                .unwrap_or(1.0)
-        }
+    let Some(r) = state.target.receiver() else {
+        return mean_illuminance_vov(t);
+    };
+    let cells = t.receiver_cells(receivers, r);
+    let mut vov: Vec<f64> = state
+        .target
+        .cells(receivers)
+        .iter()
+        .map(|&c| &cells[c])
+        .filter(|c| c.hits > 0)
+        .map(|c| variance_of_variance(c.moments.map(|m| m.value()), t.photons))
+        .collect();
+    if vov.is_empty() {
+        return 1.0;
     }
+    vov.sort_by(f64::total_cmp);
+    let rank = match state.target {
+        Target::Block { .. } => vov.len() - 1,
+        _ => (vov.len() * 9 / 10).min(vov.len() - 1),
+    };
+    vov[rank]
 }

@@ -219,10 +219,21 @@ pub fn map_stats(t: &Tallies, kind: MapKind, areas_m2: &[f64], total_flux_lm: f6
     }
     // One pass over the counts: flux per photon of all photons, of odd and of even ones.
     let per_photon = total_flux_lm / t.photons as f64;
-    let per_odd = if n_odd > 0 { total_flux_lm / n_odd as f64 } else { 0.0 };
-    let per_even = if n_even > 0 { total_flux_lm / n_even as f64 } else { 0.0 };
+    let per_odd = if n_odd > 0 {
+        total_flux_lm / n_odd as f64
+    } else {
+        0.0
+    };
+    let per_even = if n_even > 0 {
+        total_flux_lm / n_even as f64
+    } else {
+        0.0
+    };
     let (mut sum_e, mut sum_e2, mut sum_d2) = (0.0, 0.0, 0.0);
-    for (&a, slots) in areas_m2.iter().zip(t.triangle_hits.chunks_exact(CODES_PER_TRIANGLE)) {
+    for (&a, slots) in areas_m2
+        .iter()
+        .zip(t.triangle_hits.chunks_exact(CODES_PER_TRIANGLE))
+    {
         let (odd, even) = parity_counts(slots, kind);
         let e = per_photon * (odd + even) as f64 / a;
         sum_e += a * e;

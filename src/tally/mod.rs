@@ -26,6 +26,15 @@ pub struct ChunkTally {
 }
 
 impl ChunkTally {
+    /// Empties the tally, keeping its buffers.
+    pub fn clear(&mut self) {
+        self.deposits.clear();
+        self.scores.clear();
+        self.rays = 0;
+        self.killed_by_bounce_cap = 0;
+        self.history_hits = [0; 4];
+    }
+
     /// A photon history ended after `hits` surface hits.
     #[inline]
     pub fn record_history_hits(&mut self, hits: u32) {

@@ -31,6 +31,9 @@ pub struct ReceiverGrid {
     pub next_event: bool,
     /// Next-event connections per diffuse vertex, in as many strata of the receiver.
     pub connections: u32,
+    /// Vertices closer than this (one cell diagonal) to a receiver point are not
+    /// connected to it; their photons score by crossing instead.
+    pub near_zone_m: f64,
 }
 
 /// Next-event connections per vertex: one per 256 cells, 1 to 16. On the office desk
@@ -68,6 +71,8 @@ pub struct Connection {
 pub struct Crossing {
     /// Global cell index.
     pub cell: u32,
+    /// Distance from the segment's origin to the crossing (m).
+    pub distance: f64,
     /// Score of a photon of unit flux (lm): 1/A_cell for illuminance,
     /// 1/(A_cell·cos θ·Ω) for luminance.
     pub score_per_lm: f64,
@@ -108,6 +113,7 @@ impl ReceiverGrid {
             first_cell,
             next_event,
             connections: connections_for(r.cell_count()),
+            near_zone_m: (r.u.length() / r.cells[0] as f64).hypot(r.v.length() / r.cells[1] as f64),
         }
     }
 
@@ -153,6 +159,7 @@ impl ReceiverGrid {
         }
         Some(Crossing {
             cell: self.cell_at(a, b),
+            distance: t,
             score_per_lm: factor / (cos_n.abs() * self.cell_area_m2),
         })
     }

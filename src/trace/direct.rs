@@ -25,7 +25,7 @@ pub const MAX_PATTERN: u32 = 32;
 pub const MAX_AREA_PATTERN: u32 = 16;
 /// Relative residual a cell is refined to: far below the statistical errors users ask
 /// for (0.5–5 %), so the direct part never dominates a cell's error.
-pub const RESIDUAL_TOLERANCE: f64 = 1e-4;
+pub const RESIDUAL_TOLERANCE: f64 = 1e-3;
 
 /// Direct light of one cell.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

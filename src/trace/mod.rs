@@ -7,9 +7,11 @@
 //! Receivers are scored in one of two ways, never both for the same path:
 //! - *track* (analog): a segment scores the cell it crosses;
 //! - *next event*: direct light is deterministic ([`direct`]); every diffuse vertex of
-//!   every history sends one shadow ray to a uniformly sampled point of the receiver and
-//!   scores its expected contribution there; only segments that leave a specular
-//!   interaction (mirror, glass: not connectable) still score by crossing.
+//!   every history sends shadow rays to sampled points of the receiver and scores its
+//!   expected contribution there; segments that leave a specular interaction (mirror,
+//!   glass: not connectable) still score by crossing, and so do diffuse segments that
+//!   cross the receiver within its near zone (one cell diagonal from their vertex),
+//!   where connections would have unbounded variance.
 
 pub mod direct;
 pub mod emit;
@@ -82,6 +84,17 @@ pub struct Scratch {
     occluded: Vec<bool>,
 }
 
+/// Where a photon's current segment started.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Segment {
+    /// At a light: its light on next-event receivers is the deterministic direct light.
+    Emitted,
+    /// At a diffuse scattering: connected to next-event receivers beyond their near zone.
+    Diffuse,
+    /// At a mirror or a refraction: cannot be connected.
+    Specular,
+}
+
 /// A live photon's state besides its ray.
 #[derive(Clone)]
 struct Lane {
@@ -90,8 +103,8 @@ struct Lane {
     /// Surface hits so far (the first is direct light, the rest indirect).
     bounces: u32,
     odd: bool,
-    /// The current segment left a specular interaction (mirror, refraction).
-    after_specular: bool,
+    /// Where the current segment started.
+    segment: Segment,
     rng: Pcg32,
 }
 
@@ -164,6 +177,20 @@ impl<'a> Tracer<'a> {
     /// Traces photons `first .. first + count` to the end of their histories.
     pub fn trace_chunk(&self, first: u64, count: u32, scratch: &mut Scratch) -> ChunkTally {
         let mut tally = ChunkTally::default();
+        self.trace_chunk_into(first, count, scratch, &mut tally);
+        tally
+    }
+
+    /// [`Self::trace_chunk`] into a reused tally (cleared first), so epochs after the
+    /// first allocate nothing.
+    pub fn trace_chunk_into(
+        &self,
+        first: u64,
+        count: u32,
+        scratch: &mut Scratch,
+        tally: &mut ChunkTally,
+    ) {
+        tally.clear();
         let flux = self.emitters.total_flux_lm;
         scratch.rays.clear();
         scratch.lanes.clear();
@@ -182,7 +209,7 @@ impl<'a> Tracer<'a> {
                     offset,
                     bounces: 0,
                     odd: index % 2 == 1,
-                    after_specular: false,
+                    segment: Segment::Emitted,
                     rng,
                 });
             }
@@ -190,12 +217,11 @@ impl<'a> Tracer<'a> {
         while !scratch.rays.is_empty() {
             self.caster.intersect(&scratch.rays, &mut scratch.hits);
             tally.rays += scratch.rays.len() as u64;
-            self.step(scratch, &mut tally, flux);
+            self.step(scratch, tally, flux);
             std::mem::swap(&mut scratch.rays, &mut scratch.next_rays);
             std::mem::swap(&mut scratch.lanes, &mut scratch.next_lanes);
         }
         fold_histories(&mut scratch.pending, &mut tally.scores);
-        tally
     }
 
     /// One bounce of every live photon: score, deposit, connect, scatter, compact.
@@ -213,11 +239,19 @@ impl<'a> Tracer<'a> {
             // photon: a receiver placed on a floor measures the floor's illuminance.
             let t_reach = hits.t[k] as f64 + self.receiver_slack;
             for r in &self.receivers {
-                // Next-event receivers take by crossing only what they cannot connect.
-                if r.next_event && !lane.after_specular {
+                let Some(c) = r.crossing(origin, dir, t_reach) else {
                     continue;
-                }
-                if let Some(c) = r.crossing(origin, dir, t_reach) {
+                };
+                // Next-event receivers take by crossing only what they do not connect:
+                // light from specular interactions, and diffuse light from vertices in
+                // their near zone.
+                let scores = !r.next_event
+                    || match lane.segment {
+                        Segment::Emitted => false,
+                        Segment::Specular => true,
+                        Segment::Diffuse => c.distance < r.near_zone_m,
+                    };
+                if scores {
                     s.pending.push((lane.offset, c.cell, c.score_per_lm * flux));
                 }
             }
@@ -272,7 +306,11 @@ impl<'a> Tracer<'a> {
                 .push(o.into(), new_dir.as_vec3().into(), 0.0, f32::INFINITY);
             s.next_lanes.push(Lane {
                 bounces: lane.bounces + 1,
-                after_specular: specular,
+                segment: if specular {
+                    Segment::Specular
+                } else {
+                    Segment::Diffuse
+                },
                 ..lane.clone()
             });
         }
@@ -315,6 +353,11 @@ impl<'a> Tracer<'a> {
             let Some(c) = r.connect(p.as_dvec3(), stratum, &mut lane.rng) else {
                 continue;
             };
+            // Near the receiver the connection's 1/d² makes the variance infinite: the
+            // photons score those paths by crossing instead (see `step`).
+            if c.distance < r.near_zone_m {
+                continue;
+            }
             let cos_s = c.dir.dot(facing.as_dvec3());
             let (coefficient, side) = if cos_s > 0.0 {
                 (rho, facing)
