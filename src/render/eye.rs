@@ -6,8 +6,8 @@
 use super::map::IndirectField;
 use crate::accel::{HitBatch, RayBatch, RayCaster, NO_HIT};
 use crate::rng::photon_stream;
-use crate::scene::{Camera, LightKind, Material, Scene};
-use crate::trace::emit::spot_profile;
+use crate::scene::{Camera, Material, Scene};
+use crate::trace::emit::{Emitter, Emitters};
 use crate::trace::sampling::uniform;
 use crate::trace::scatter::{offset_origin, reflect, refract};
 use glam::{DVec3, Vec3};
@@ -37,35 +37,6 @@ pub struct RayCounts {
     pub eye: u64,
     /// Shadow (occlusion) rays.
     pub shadow: u64,
-}
-
-/// A light prepared for direct illumination, local frame.
-#[derive(Clone, Debug)]
-enum DirectLight {
-    Point {
-        position: DVec3,
-        intensity_cd: f64,
-    },
-    Spot {
-        position: DVec3,
-        axis: DVec3,
-        intensity_cd: f64,
-        cos_cone: f64,
-        cos_falloff: f64,
-    },
-    Directional {
-        /// Unit, the way the light travels.
-        direction: DVec3,
-        illuminance_lx: f64,
-    },
-    Area {
-        corner: DVec3,
-        u: DVec3,
-        v: DVec3,
-        normal: DVec3,
-        area_m2: f64,
-        luminance_cdm2: f64,
-    },
 }
 
 /// The pinhole camera in the local frame.
@@ -126,7 +97,7 @@ pub struct EyePass<'a> {
     scene: &'a Scene,
     camera: &'a Camera,
     field: &'a IndirectField,
-    lights: Vec<DirectLight>,
+    lights: Emitters,
     pinhole: Pinhole,
     scene_scale: f32,
     seed: u64,
@@ -156,58 +127,8 @@ impl<'a> EyePass<'a> {
         seed: u64,
     ) -> EyePass<'a> {
         let origin = scene.geometry.origin;
-        let lights = scene
-            .lights
-            .iter()
-            .map(|l| match l.kind {
-                LightKind::Point {
-                    position,
-                    intensity_cd,
-                } => DirectLight::Point {
-                    position: position - origin,
-                    intensity_cd,
-                },
-                LightKind::Spot {
-                    position,
-                    direction,
-                    intensity_cd,
-                    cone_deg,
-                    falloff_deg,
-                } => DirectLight::Spot {
-                    position: position - origin,
-                    axis: direction.normalize(),
-                    intensity_cd,
-                    cos_cone: cone_deg.to_radians().cos(),
-                    cos_falloff: falloff_deg.to_radians().cos(),
-                },
-                LightKind::Directional {
-                    direction,
-                    illuminance_lx,
-                } => DirectLight::Directional {
-                    direction: direction.normalize(),
-                    illuminance_lx,
-                },
-                LightKind::Area {
-                    corner,
-                    u,
-                    v,
-                    luminance_cdm2,
-                } => DirectLight::Area {
-                    corner: corner - origin,
-                    u,
-                    v,
-                    normal: u.cross(v).normalize(),
-                    area_m2: u.cross(v).length(),
-                    luminance_cdm2,
-                },
-            })
-            .collect();
-        let scene_scale = scene
-            .geometry
-            .vertices
-            .iter()
-            .map(|v| v.abs().max_element())
-            .fold(f32::MIN_POSITIVE, f32::max);
+        let lights = Emitters::new(scene);
+        let scene_scale = scene.geometry.local_scale();
         EyePass {
             caster,
             scene,
@@ -418,79 +339,35 @@ impl<'a> EyePass<'a> {
         // Shadow rays towards a point stop just short of it: a source sitting on a
         // surface is not shadowed by that surface.
         const SHORT: f32 = 1.0 - 1e-5;
-        for light in &self.lights {
-            match *light {
-                DirectLight::Point {
-                    position,
-                    intensity_cd,
-                } => {
-                    let to = position - pd;
-                    let d2 = to.length_squared();
-                    let (g, leave) = gain(to / d2.sqrt());
-                    push(s, leave, to, SHORT, g * intensity_cd / d2);
-                }
-                DirectLight::Spot {
-                    position,
-                    axis,
-                    intensity_cd,
-                    cos_cone,
-                    cos_falloff,
-                } => {
-                    let to = position - pd;
-                    let d2 = to.length_squared();
-                    let w = to / d2.sqrt();
-                    let i = intensity_cd * spot_profile(-w.dot(axis), cos_cone, cos_falloff);
-                    let (g, leave) = gain(w);
-                    push(s, leave, to, SHORT, g * i / d2);
-                }
-                DirectLight::Directional {
-                    direction,
-                    illuminance_lx,
-                } => {
-                    let (g, leave) = gain(-direction);
-                    push(s, leave, -direction, f32::INFINITY, g * illuminance_lx);
-                }
-                DirectLight::Area {
-                    corner,
-                    u,
-                    v,
-                    normal,
-                    area_m2,
-                    luminance_cdm2,
-                } => {
-                    // n × n jittered strata, from a stream of (tile, depth, ray): the
-                    // same whatever the threads or the backend.
-                    let n = area_samples_per_side(
-                        self.camera.area_light_samples,
-                        (u + v).length(),
-                        (corner + 0.5 * (u + v) - pd).length(),
-                    );
-                    let mut rng = photon_stream(self.seed ^ 0xa5a5_a5a5_0000_0000, stream);
-                    let da = area_m2 / (n * n) as f64;
-                    for i in 0..n {
-                        for j in 0..n {
-                            let q = corner
-                                + u * ((i as f64 + uniform(&mut rng)) / n as f64)
-                                + v * ((j as f64 + uniform(&mut rng)) / n as f64);
-                            let to = q - pd;
-                            let d2 = to.length_squared();
-                            let w = to / d2.sqrt();
-                            let cos_light = -w.dot(normal);
-                            if cos_light <= 0.0 {
-                                continue;
-                            }
-                            let (g, leave) = gain(w);
-                            push(
-                                s,
-                                leave,
-                                to,
-                                SHORT,
-                                g * luminance_cdm2 * cos_light * da / d2,
-                            );
-                        }
-                    }
+        let mut area_pattern = Vec::new();
+        for light in 0..self.lights.emitters.len() {
+            if let Emitter::Area { corner, u, v, .. } = self.lights.emitters[light] {
+                // n × n jittered strata, from a stream of (tile, depth, ray): the same
+                // whatever the threads or the backend.
+                let n = area_samples_per_side(
+                    self.camera.area_light_samples,
+                    (u + v).length(),
+                    (corner + 0.5 * (u + v) - pd).length(),
+                );
+                let mut rng = photon_stream(self.seed ^ 0xa5a5_a5a5_0000_0000, stream);
+                area_pattern.clear();
+                for k in 0..n * n {
+                    let (i, j) = ((k / n) as f64, (k % n) as f64);
+                    area_pattern.push((
+                        (i + uniform(&mut rng)) / n as f64,
+                        (j + uniform(&mut rng)) / n as f64,
+                    ));
                 }
             }
+            self.lights.incoming(light, pd, &area_pattern, |inc| {
+                let (g, leave) = gain(inc.direction());
+                let t_far = if inc.distance.is_finite() {
+                    SHORT
+                } else {
+                    f32::INFINITY
+                };
+                push(s, leave, inc.to_source, t_far, g * inc.normal_lx);
+            });
         }
     }
 
@@ -498,15 +375,13 @@ impl<'a> EyePass<'a> {
     /// (the sources are not scene geometry; the eye still sees them).
     fn area_light_seen(&self, o: DVec3, dir: DVec3, t_hit: f64) -> f64 {
         let mut l = 0.0;
-        for light in &self.lights {
-            if let DirectLight::Area {
+        for (light, emitter) in self.lights.emitters.iter().enumerate() {
+            if let Emitter::Area {
                 corner,
                 u,
                 v,
                 normal,
-                luminance_cdm2,
-                ..
-            } = *light
+            } = *emitter
             {
                 let cos = dir.dot(normal);
                 if cos >= 0.0 {
@@ -522,7 +397,7 @@ impl<'a> EyePass<'a> {
                 let a = r.cross(v).dot(uv) / uv.length_squared();
                 let b = u.cross(r).dot(uv) / uv.length_squared();
                 if (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) {
-                    l += luminance_cdm2;
+                    l += self.lights.intensity_scale[light];
                 }
             }
         }

@@ -91,6 +91,15 @@ impl Geometry {
         self.area_m2.iter().sum()
     }
 
+    /// Largest coordinate of the local frame (at least the smallest positive f32): the
+    /// scale ray-origin offsets are sized by.
+    pub fn local_scale(&self) -> f32 {
+        self.vertices
+            .iter()
+            .map(|v| v.abs().max_element())
+            .fold(f32::MIN_POSITIVE, f32::max)
+    }
+
     /// World-space bounds (min, max) of all vertices, or `None` without geometry.
     pub fn world_bounds(&self) -> Option<(DVec3, DVec3)> {
         let mut it = self.vertices.iter();

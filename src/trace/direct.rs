@@ -10,10 +10,9 @@
 //! [`RESIDUAL_TOLERANCE`] of its value or the pattern reaches [`MAX_PATTERN`]. The
 //! residual shrinks by refinement, never by photons.
 
-use super::emit::{spot_profile, Emitter, Emitters};
+use super::emit::{Emitter, Emitters};
 use crate::accel::{RayBatch, RayCaster};
 use crate::tally::ReceiverGrid;
-use glam::DVec3;
 use rayon::prelude::*;
 
 /// Coarsest pattern: 2 × 2 points per cell (and per area source); the first value
@@ -107,23 +106,41 @@ fn cell_pattern(
     rays.clear();
     weights.clear();
     let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
-    for sa in 0..m {
-        for sb in 0..m {
-            let a = (i as f64 + (sa as f64 + 0.5) / m as f64) / nu;
-            let b = (j as f64 + (sb as f64 + 0.5) / m as f64) / nv;
-            let p = grid.point_at(a, b);
-            for (light, emitter) in emitters.emitters.iter().enumerate() {
-                light_at_point(
-                    grid,
-                    emitter,
-                    emitters.intensity_scale[light],
-                    p,
-                    m,
-                    shadows,
-                    rays,
-                    weights,
+    // The same m × m midpoint pattern over the cell and over area sources.
+    let pattern: Vec<(f64, f64)> = (0..m * m)
+        .map(|k| {
+            (
+                ((k / m) as f64 + 0.5) / m as f64,
+                ((k % m) as f64 + 0.5) / m as f64,
+            )
+        })
+        .collect();
+    for &(sa, sb) in &pattern {
+        let p = grid.point_at((i as f64 + sa) / nu, (j as f64 + sb) / nv);
+        for light in 0..emitters.emitters.len() {
+            emitters.incoming(light, p, &pattern, |inc| {
+                if inc.distance <= 4.0 * shadows.slack {
+                    return;
+                }
+                let Some(factor) = grid.arrival_factor(-inc.direction()) else {
+                    return;
+                };
+                // Stop just short of a source piece, and start a directional source's
+                // ray just off the receiver, which may lie on a surface.
+                let (t_near, t_far) = if inc.distance.is_finite() {
+                    let eps = (2.0 * shadows.slack / inc.distance) as f32;
+                    (eps, 1.0 - eps)
+                } else {
+                    ((2.0 * shadows.slack) as f32, f32::INFINITY)
+                };
+                rays.push(
+                    p.as_vec3().into(),
+                    inc.to_source.as_vec3().into(),
+                    t_near,
+                    t_far,
                 );
-            }
+                weights.push(inc.normal_lx * factor);
+            });
         }
     }
     shadows.caster.occluded(rays, occluded);
@@ -134,82 +151,4 @@ fn cell_pattern(
         .map(|(w, _)| w)
         .sum();
     lit / (m * m) as f64
-}
-
-/// Appends the shadow rays and unshadowed contributions of one light at point `p`.
-#[allow(clippy::too_many_arguments)]
-fn light_at_point(
-    grid: &ReceiverGrid,
-    emitter: &Emitter,
-    intensity_scale: f64,
-    p: DVec3,
-    m: u32,
-    shadows: &Shadows<'_>,
-    rays: &mut RayBatch,
-    weights: &mut Vec<f64>,
-) {
-    // A point source of intensity `intensity` at `q`: value I·factor/d².
-    let from_point = |q: DVec3, intensity: f64, rays: &mut RayBatch, weights: &mut Vec<f64>| {
-        let d = q - p;
-        let dist = d.length();
-        if !(intensity > 0.0) || dist <= 4.0 * shadows.slack {
-            return;
-        }
-        if let Some(factor) = grid.arrival_factor(-d / dist) {
-            let eps = 2.0 * shadows.slack / dist;
-            rays.push(
-                p.as_vec3().into(),
-                d.as_vec3().into(),
-                eps as f32,
-                (1.0 - eps) as f32,
-            );
-            weights.push(intensity * factor / (dist * dist));
-        }
-    };
-    match *emitter {
-        Emitter::Point { position } => from_point(position, intensity_scale, rays, weights),
-        Emitter::Spot {
-            position,
-            axis,
-            cos_cone,
-            cos_falloff,
-        } => {
-            let to_p = (p - position).normalize_or_zero();
-            let profile = spot_profile(to_p.dot(axis), cos_cone, cos_falloff);
-            from_point(position, intensity_scale * profile, rays, weights)
-        }
-        Emitter::Directional { direction, .. } => {
-            if intensity_scale > 0.0 {
-                if let Some(factor) = grid.arrival_factor(direction) {
-                    rays.push(
-                        p.as_vec3().into(),
-                        (-direction).as_vec3().into(),
-                        (2.0 * shadows.slack) as f32,
-                        f32::INFINITY,
-                    );
-                    weights.push(intensity_scale * factor);
-                }
-            }
-        }
-        Emitter::Area {
-            corner,
-            u,
-            v,
-            normal,
-        } => {
-            // m × m patches of the source, each a point source of intensity L·cos θ·ΔA.
-            let patch_area = u.cross(v).length() / (m * m) as f64;
-            for sa in 0..m {
-                for sb in 0..m {
-                    let q = corner
-                        + u * ((sa as f64 + 0.5) / m as f64)
-                        + v * ((sb as f64 + 0.5) / m as f64);
-                    let cos_s = (p - q).normalize_or_zero().dot(normal);
-                    if cos_s > 0.0 {
-                        from_point(q, intensity_scale * cos_s * patch_area, rays, weights);
-                    }
-                }
-            }
-        }
-    }
 }

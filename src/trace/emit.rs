@@ -215,6 +215,96 @@ impl Emitters {
     }
 }
 
+/// Light from one source arriving at a point, as one point-like piece of it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Incoming {
+    /// From the point towards the piece: the vector to it, or for a directional source
+    /// the unit direction towards the source.
+    pub to_source: DVec3,
+    /// Distance to the piece; `f64::INFINITY` for a directional source.
+    pub distance: f64,
+    /// Illuminance the piece gives on a plane facing it (lx): I/d² for point and spot
+    /// sources, E⊥ for directional ones, L·cos θ_s·ΔA/d² for a patch of an area source.
+    pub normal_lx: f64,
+}
+
+impl Incoming {
+    /// Unit direction from the point towards the piece.
+    #[inline]
+    pub fn direction(&self) -> DVec3 {
+        if self.distance.is_finite() {
+            self.to_source / self.distance
+        } else {
+            self.to_source
+        }
+    }
+}
+
+impl Emitters {
+    /// The light of source `light` arriving at local point `p` (method.md eqs. 1–2),
+    /// piece by piece: one piece for point, spot and directional sources; for an area
+    /// source one per point of `area_pattern` (coordinates along u and v in [0, 1)²),
+    /// each standing for an equal share of its area. Visibility is the caller's.
+    pub fn incoming(
+        &self,
+        light: usize,
+        p: DVec3,
+        area_pattern: &[(f64, f64)],
+        mut each: impl FnMut(Incoming),
+    ) {
+        let scale = self.intensity_scale[light];
+        if !(scale > 0.0) {
+            return;
+        }
+        let mut from_point = |q: DVec3, intensity: f64| {
+            let to_source = q - p;
+            let distance = to_source.length();
+            if intensity > 0.0 && distance > 0.0 {
+                each(Incoming {
+                    to_source,
+                    distance,
+                    normal_lx: intensity / (distance * distance),
+                });
+            }
+        };
+        match self.emitters[light] {
+            Emitter::Point { position } => from_point(position, scale),
+            Emitter::Spot {
+                position,
+                axis,
+                cos_cone,
+                cos_falloff,
+            } => {
+                let towards_p = (p - position).normalize_or_zero();
+                from_point(
+                    position,
+                    scale * spot_profile(towards_p.dot(axis), cos_cone, cos_falloff),
+                );
+            }
+            Emitter::Directional { direction, .. } => each(Incoming {
+                to_source: -direction,
+                distance: f64::INFINITY,
+                normal_lx: scale,
+            }),
+            Emitter::Area {
+                corner,
+                u,
+                v,
+                normal,
+            } => {
+                let patch_area = u.cross(v).length() / area_pattern.len().max(1) as f64;
+                for &(a, b) in area_pattern {
+                    let q = corner + u * a + v * b;
+                    let cos_s = (p - q).normalize_or_zero().dot(normal);
+                    if cos_s > 0.0 {
+                        from_point(q, scale * cos_s * patch_area);
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// Centre (world) and radius of a sphere holding the geometry and the receivers.
 fn bounding_sphere(scene: &Scene) -> (DVec3, f64) {
     let mut points: Vec<DVec3> = Vec::new();

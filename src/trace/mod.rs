@@ -138,11 +138,7 @@ impl<'a> Tracer<'a> {
                 grid
             })
             .collect();
-        let scene_scale = g
-            .vertices
-            .iter()
-            .map(|v| v.abs().max_element())
-            .fold(f32::MIN_POSITIVE, f32::max);
+        let scene_scale = g.local_scale();
         let max_albedo = scene
             .materials
             .iter()
