@@ -19,7 +19,8 @@ pub struct Summary {
     pub threads: usize,
     pub photons_emitted: u64,
     pub rays_traced: u64,
-    /// Wall time of the photon pass (s); `setup_s` is loading and BVH build before it.
+    /// Wall time of the photon pass (s); `setup_s` is what came before it: BVH build and
+    /// the next-event receivers' deterministic direct light (`direct_s` of it).
     pub elapsed_s: f64,
     pub setup_s: f64,
     /// Null while the run is still going (a summary saved mid-run).

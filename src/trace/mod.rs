@@ -170,15 +170,9 @@ impl<'a> Tracer<'a> {
         self.receivers.iter().map(|r| r.cell_count()).sum()
     }
 
-    /// Traces photons `first .. first + count` to the end of their histories.
-    pub fn trace_chunk(&self, first: u64, count: u32, scratch: &mut Scratch) -> ChunkTally {
-        let mut tally = ChunkTally::default();
-        self.trace_chunk_into(first, count, scratch, &mut tally);
-        tally
-    }
-
-    /// [`Self::trace_chunk`] into a reused tally (cleared first), so epochs after the
-    /// first allocate nothing.
+    /// Traces photons `first .. first + count` to the end of their histories into
+    /// `tally` (cleared first; reused from epoch to epoch, so that epochs after the first
+    /// allocate nothing).
     pub fn trace_chunk_into(
         &self,
         first: u64,
