@@ -563,7 +563,7 @@ pub fn bench_accuracy(
     );
     let _ = writeln!(
         out,
-        "Stopped on {} after {:.3} s, {} photons, {} rays; direct light {:.3} s ({} shadow rays); statistics and forecasts {:.4} s = {:.3} % of the run; FOM {:.0} (stable: {}), VOV {:.4}.\n",
+        "Stopped on {} after {:.3} s, {} photons, {} rays; direct light {:.3} s ({} shadow rays); statistics and forecasts {:.4} s = {:.3} % of the run; merging {:.4} s = {:.3} %; FOM {:.0} (stable: {}), VOV {:.4}.\n",
         result.stop_reason.as_str(),
         result.elapsed_s,
         result.tallies.photons,
@@ -572,6 +572,8 @@ pub fn bench_accuracy(
         result.direct_rays,
         result.stats_s,
         100.0 * result.stats_s / result.elapsed_s.max(1e-9),
+        result.merge_s,
+        100.0 * result.merge_s / result.elapsed_s.max(1e-9),
         summary.reliability.fom,
         summary.reliability.fom_stable,
         summary.reliability.vov,

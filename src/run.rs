@@ -87,8 +87,10 @@ pub struct RunState<'a> {
     /// Shadow rays and seconds spent on the receivers' deterministic direct light.
     pub direct_rays: u64,
     pub direct_s: f64,
-    /// Seconds spent on statistics, forecasts and stop checks (all epochs).
+    /// Seconds spent on statistics, forecasts and stop checks, and on merging the
+    /// chunks' tallies (all epochs).
     pub stats_s: f64,
+    pub merge_s: f64,
     /// Set on the last epoch.
     pub stop_reason: Option<StopReason>,
 }
@@ -110,6 +112,7 @@ pub struct RunResult {
     pub direct_rays: u64,
     pub direct_s: f64,
     pub stats_s: f64,
+    pub merge_s: f64,
 }
 
 impl RunResult {
@@ -132,6 +135,7 @@ impl RunResult {
             direct_rays: self.direct_rays,
             direct_s: self.direct_s,
             stats_s: self.stats_s,
+            merge_s: self.merge_s,
             stop_reason: Some(self.stop_reason),
         }
     }
@@ -216,7 +220,7 @@ pub fn run_with(
     }
     let direct_s = direct_start.elapsed().as_secs_f64();
     let next_event: Vec<bool> = tracer.receivers.iter().map(|g| g.next_event).collect();
-    let mut stats_s = 0.0;
+    let (mut stats_s, mut merge_s) = (0.0, 0.0);
     let mut history: Vec<HistoryPoint> = Vec::new();
     let mut latest_forecast = None;
     let setup_s = setup.elapsed().as_secs_f64();
@@ -252,9 +256,11 @@ pub fn run_with(
                     })
                 })
         });
+        let merge_start = Instant::now();
         for (chunk, &(_, n)) in results.iter().zip(&chunks) {
             tallies.accumulate(chunk, n as u64);
         }
+        merge_s += merge_start.elapsed().as_secs_f64();
         let elapsed_s = start.elapsed().as_secs_f64();
         let stats_start = Instant::now();
 
@@ -312,6 +318,7 @@ pub fn run_with(
             direct_rays,
             direct_s,
             stats_s,
+            merge_s,
             stop_reason: reason,
         });
         if let Some(reason) = reason {
@@ -357,6 +364,7 @@ pub fn run_with(
         direct_rays,
         direct_s,
         stats_s,
+        merge_s,
     })
 }
 

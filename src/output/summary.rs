@@ -41,6 +41,9 @@ pub struct Summary {
     /// share of `elapsed_s`.
     pub stats_s: f64,
     pub stats_share: f64,
+    /// Seconds of merging the chunks' tallies at epoch ends, and their share.
+    pub merge_s: f64,
+    pub merge_share: f64,
     pub receivers: BTreeMap<String, ReceiverSummary>,
     pub global: GlobalSummary,
     /// How far the target's error can be trusted (FOM, its stability, VOV).
@@ -168,6 +171,12 @@ pub fn build(state: &RunState<'_>) -> Summary {
         direct_rays: state.direct_rays,
         direct_s: state.direct_s,
         stats_s: state.stats_s,
+        merge_s: state.merge_s,
+        merge_share: if state.elapsed_s > 0.0 {
+            state.merge_s / state.elapsed_s
+        } else {
+            0.0
+        },
         stats_share: if state.elapsed_s > 0.0 {
             state.stats_s / state.elapsed_s
         } else {

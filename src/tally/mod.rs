@@ -14,8 +14,8 @@ pub use receiver::{Connection, Crossing, ReceiverGrid};
 pub struct ChunkTally {
     /// Triangle-face deposits, one per photon hit: see [`deposit_code`].
     pub deposits: Vec<u32>,
-    /// Receiver scores, one per (photon history, cell), already summed over the history.
-    pub scores: Vec<HistoryScore>,
+    /// Receiver scores per touched cell, in cell order.
+    pub scores: Vec<CellPartial>,
     /// Rays cast (closest-hit and shadow).
     pub rays: u64,
     /// Photons stopped by the bounce cap.
@@ -46,15 +46,27 @@ impl ChunkTally {
     }
 }
 
-/// One photon history's total score in one receiver cell.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct HistoryScore {
+/// One chunk's scores in one receiver cell: the moments Σx, Σx², Σx³, Σx⁴ over the
+/// chunk's histories (each history's scores in the cell summed first, so eqs. 6–8 see
+/// per-history scores) and the crossings or contributions counted.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CellPartial {
     /// Global cell index over all receivers (see [`ReceiverGrid::first_cell`]).
     pub cell: u32,
-    /// Crossings (or contributions) this history scored in the cell.
-    pub hits: u32,
-    /// The history's score x_i, in the receiver's unit for a photon of weight Φ_total.
-    pub score: f64,
+    pub hits: u64,
+    pub moments: [f64; 4],
+}
+
+impl CellPartial {
+    /// Adds one history's score `x` made of `hits` contributions.
+    #[inline]
+    pub fn add_history(&mut self, x: f64, hits: u64) {
+        let x2 = x * x;
+        for (m, v) in self.moments.iter_mut().zip([x, x2, x2 * x, x2 * x2]) {
+            *m += v;
+        }
+        self.hits += hits;
+    }
 }
 
 /// Faces, light kinds and photon parities a triangle keeps apart.
@@ -110,13 +122,11 @@ pub struct CellSums {
 
 impl CellSums {
     #[inline]
-    fn add(&mut self, x: f64, hits: u32) {
-        let x2 = x * x;
-        self.moments[0].add(x);
-        self.moments[1].add(x2);
-        self.moments[2].add(x2 * x);
-        self.moments[3].add(x2 * x2);
-        self.hits += hits as u64;
+    fn add(&mut self, partial: &CellPartial) {
+        for (total, part) in self.moments.iter_mut().zip(partial.moments) {
+            total.add(part);
+        }
+        self.hits += partial.hits;
     }
 
     pub fn sum(&self) -> f64 {
@@ -164,8 +174,8 @@ impl Tallies {
         for &code in &chunk.deposits {
             self.triangle_hits[code as usize] += 1;
         }
-        for s in &chunk.scores {
-            self.cells[s.cell as usize].add(s.score, s.hits);
+        for p in &chunk.scores {
+            self.cells[p.cell as usize].add(p);
         }
     }
 

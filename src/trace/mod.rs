@@ -21,7 +21,7 @@ pub mod scatter;
 use crate::accel::{HitBatch, RayBatch, RayCaster, NO_HIT};
 use crate::rng::photon_stream;
 use crate::scene::{Estimator, Scene};
-use crate::tally::{deposit_code, ChunkTally, HistoryScore, ReceiverGrid};
+use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid};
 use emit::Emitters;
 use glam::{DVec3, Vec3};
 use rand_pcg::Pcg32;
@@ -78,6 +78,8 @@ pub struct Scratch {
     next_lanes: Vec<Lane>,
     /// (photon offset in chunk, cell, score) before folding per history.
     pending: Vec<(u32, u32, f64)>,
+    /// Per-cell sums of the chunk's histories while folding.
+    cell_acc: Vec<CellPartial>,
     /// Next-event shadow rays of this bounce and what each scores if unoccluded.
     shadow_rays: RayBatch,
     shadow_scores: Vec<(u32, u32, f64)>,
@@ -211,7 +213,11 @@ impl<'a> Tracer<'a> {
             std::mem::swap(&mut scratch.rays, &mut scratch.next_rays);
             std::mem::swap(&mut scratch.lanes, &mut scratch.next_lanes);
         }
-        fold_histories(&mut scratch.pending, &mut tally.scores);
+        fold_histories(
+            &mut scratch.pending,
+            &mut scratch.cell_acc,
+            &mut tally.scores,
+        );
     }
 
     /// One bounce of every live photon: score, deposit, connect, scatter, compact.
@@ -370,24 +376,42 @@ impl<'a> Tracer<'a> {
     }
 }
 
-/// Sums each photon history's scores per cell (a photon crossing a cell twice scores once,
-/// with the sum), so Σx² is over histories as eqs. 6–8 require.
-fn fold_histories(pending: &mut [(u32, u32, f64)], out: &mut Vec<HistoryScore>) {
+/// Sums each photon history's scores per cell (a photon crossing a cell twice scores
+/// once, with the sum), so Σx² is over histories as eqs. 6–8 require, then adds the
+/// histories of the chunk per cell (in the worker, so the epoch's merge handles one
+/// entry per touched cell, not one per history). `acc` is scratch indexed by cell.
+fn fold_histories(
+    pending: &mut [(u32, u32, f64)],
+    acc: &mut Vec<CellPartial>,
+    out: &mut Vec<CellPartial>,
+) {
     pending.sort_by_key(|&(offset, cell, _)| (offset, cell));
-    let mut last: Option<(u32, u32)> = None;
-    for &(offset, cell, score) in pending.iter() {
-        match out.last_mut() {
-            Some(h) if last == Some((offset, cell)) => {
-                h.score += score;
-                h.hits += 1;
-            }
-            _ => out.push(HistoryScore {
-                cell,
-                hits: 1,
-                score,
-            }),
+    let mut k = 0;
+    while k < pending.len() {
+        let (offset, cell, mut x) = pending[k];
+        let mut hits = 1;
+        k += 1;
+        while k < pending.len() && (pending[k].0, pending[k].1) == (offset, cell) {
+            x += pending[k].2;
+            hits += 1;
+            k += 1;
         }
-        last = Some((offset, cell));
+        if acc.len() <= cell as usize {
+            acc.resize(cell as usize + 1, CellPartial::default());
+        }
+        let slot = &mut acc[cell as usize];
+        if slot.hits == 0 {
+            slot.cell = cell;
+            out.push(CellPartial {
+                cell,
+                ..CellPartial::default()
+            });
+        }
+        slot.add_history(x, hits);
+    }
+    out.sort_by_key(|p| p.cell);
+    for p in out.iter_mut() {
+        *p = std::mem::take(&mut acc[p.cell as usize]);
     }
 }
 
@@ -405,10 +429,22 @@ mod tests {
 
     #[test]
     fn histories_fold_per_photon_and_cell() {
+        // Photon 1 crosses cell 5 twice (one history score of 4) and cell 2 once.
         let mut pending = vec![(1, 5, 1.0), (0, 5, 2.0), (1, 5, 3.0), (1, 2, 4.0)];
-        let mut out = Vec::new();
-        fold_histories(&mut pending, &mut out);
-        let got: Vec<(u32, u32, f64)> = out.iter().map(|h| (h.cell, h.hits, h.score)).collect();
-        assert_eq!(got, vec![(5, 1, 2.0), (2, 1, 4.0), (5, 2, 4.0)]);
+        let (mut acc, mut out) = (Vec::new(), Vec::new());
+        fold_histories(&mut pending, &mut acc, &mut out);
+        let cell = |cell, hits, m: [f64; 4]| CellPartial {
+            cell,
+            hits,
+            moments: m,
+        };
+        assert_eq!(
+            out,
+            vec![
+                cell(2, 1, [4.0, 16.0, 64.0, 256.0]),
+                cell(5, 3, [6.0, 20.0, 72.0, 272.0])
+            ]
+        );
+        assert!(acc.iter().all(|p| p.hits == 0), "scratch left clean");
     }
 }
