@@ -277,3 +277,17 @@ fn combined_criteria_first_met_wins() {
     assert_eq!(s.stop_reason, Some("target_error"));
     assert!(s.elapsed_s < 60.0);
 }
+
+#[test]
+fn stop_criteria_are_read_from_the_scene_simulation_table() {
+    let toml = point_over_plane(8, 8)
+        + "[simulation]\ntarget_error = 0.05\ntarget = \"receiver:r[0..4,0..4]\"\ntime_limit = 60\nseed = 7\n";
+    let scene = scene(&toml);
+    let mut opts = RunOptions::from_scene(&scene);
+    opts.threads = 2;
+    let s = run_options(&scene, &opts);
+    assert_eq!(s.stop_reason, Some("target_error"));
+    assert_eq!(s.target, "receiver:r[0..4,0..4]");
+    assert_eq!(s.seed, 7);
+    assert_stopped_at_first_crossing(&s, 0.05);
+}

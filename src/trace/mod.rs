@@ -54,8 +54,6 @@ pub struct Tracer<'a> {
     normals: &'a [Vec3],
     /// Lobes per triangle's material, looked up through `triangle_material`.
     lobes: Vec<Lobes>,
-    /// Diffuse reflectance and transmittance per material (next-event weights).
-    diffuse: Vec<(f64, f64)>,
     triangle_material: &'a [u32],
     pub emitters: Emitters,
     pub receivers: Vec<ReceiverGrid>,
@@ -152,11 +150,6 @@ impl<'a> Tracer<'a> {
             triangles: &g.triangles,
             normals: &g.normal,
             lobes: scene.materials.iter().map(Lobes::new).collect(),
-            diffuse: scene
-                .materials
-                .iter()
-                .map(|m| (m.reflectance, m.transmittance))
-                .collect(),
             triangle_material: &g.material,
             emitters: Emitters::new(scene),
             receivers,
@@ -266,7 +259,7 @@ impl<'a> Tracer<'a> {
             let p = a + (b - a) * hits.u[k] + (c - a) * hits.v[k];
             let facing = if back_face { -normal } else { normal };
             let material = self.triangle_material[tri as usize] as usize;
-            let (rho, tau) = self.diffuse[material];
+            let (rho, tau) = self.lobes[material].diffuse();
             if rho + tau > 0.0 {
                 self.connect(
                     p,

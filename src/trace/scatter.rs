@@ -18,6 +18,15 @@ pub struct Lobes {
 }
 
 impl Lobes {
+    /// Diffuse reflectance and diffuse transmittance.
+    #[inline]
+    pub fn diffuse(&self) -> (f64, f64) {
+        (
+            self.diffuse_reflect,
+            self.diffuse_transmit - self.diffuse_reflect,
+        )
+    }
+
     pub fn new(m: &Material) -> Lobes {
         let diffuse_reflect = m.reflectance;
         let diffuse_transmit = diffuse_reflect + m.transmittance;
