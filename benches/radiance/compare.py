@@ -1,0 +1,367 @@
+#!/usr/bin/env python3
+"""Radiance (rtrace) against luxtally on the office desk receiver (issue 7).
+
+Installs pyradiance (whose wheel bundles the Radiance binaries) into a venv under
+target/, writes scenes/office.toml as a Radiance scene, and runs
+
+    rtrace -h -I+ -ab 5 -aa 0 -ad N -as N/2 -lw 1e-4 -u+ -n 2
+
+over the 2048 desk cell centres, doubling N until Radiance's per-cell noise is <= 1 %,
+then runs luxtally to the same target and prints a Markdown table. Plain Python 3.11
+standard library; see benches/radiance/README.md.
+"""
+
+import argparse
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+
+# --- the office (scenes/office.toml), restated -----------------------------------
+ROOM_MIN = (0.0, 0.0, 0.0)
+ROOM_MAX = (6.0, 5.0, 3.0)
+RHO_WALL = 0.5
+TABLE = ((2.2, 2.1, 0.75), (1.6, 0.0, 0.0), (0.0, 0.8, 0.0))  # corner, u, v
+RHO_TABLE = 0.3
+LIGHT_POS = (3.0, 2.5, 2.8)
+LIGHT_CD = 1000.0
+DESK = ((2.5, 2.25, 0.7501), (1.0, 0.0, 0.0), (0.0, 0.5, 0.0))  # corner, u, v
+CELLS = (64, 32)
+
+LM_PER_W = 179.0  # Radiance's luminous efficacy of its "white" watt
+PHOTOMETRIC = (0.265, 0.670, 0.065)  # Radiance's RGB -> luminance weights
+
+
+def die(msg, code=1):
+    print(f"compare.py: {msg}", file=sys.stderr)
+    sys.exit(code)
+
+
+def log(msg):
+    print(msg, file=sys.stderr, flush=True)
+
+
+# --- pyradiance in a venv --------------------------------------------------------
+def setup_radiance(venv: Path):
+    py = venv / "bin" / "python"
+    if not py.exists():
+        log(f"creating venv {venv}")
+        r = subprocess.run([sys.executable, "-m", "venv", str(venv)])
+        if r.returncode != 0:
+            die(f"could not create a venv in {venv}")
+    probe = (
+        "import os, pyradiance, pyradiance.anci as a;"
+        "print(a.BINPATH); print(os.environ['RAYPATH']); print(pyradiance.__version__)"
+    )
+    r = subprocess.run([str(py), "-c", probe], capture_output=True, text=True)
+    if r.returncode != 0:
+        log("pip install pyradiance (into the venv)")
+        inst = subprocess.run([str(py), "-m", "pip", "install", "-q", "pyradiance"])
+        if inst.returncode != 0:
+            die(
+                "`pip install pyradiance` failed: no wheel for this platform/Python or no "
+                "access to PyPI. Install Radiance (rtrace, oconv) and pass --radiance-bin."
+            )
+        r = subprocess.run([str(py), "-c", probe], capture_output=True, text=True)
+        if r.returncode != 0:
+            die(f"pyradiance installed but does not import:\n{r.stderr}")
+    binpath, raypath, version = r.stdout.strip().splitlines()[:3]
+    return Path(binpath), raypath, f"pyradiance {version}"
+
+
+def find_tools(binpath: Path):
+    tools = {}
+    for name in ("rtrace", "oconv"):
+        p = binpath / name
+        if not p.exists():
+            w = shutil.which(name)
+            if w is None:
+                die(f"{name} not found in {binpath} nor on PATH")
+            p = Path(w)
+        tools[name] = str(p)
+    return tools
+
+
+# --- the Radiance scene ----------------------------------------------------------
+def poly(mat, name, pts):
+    coords = "  ".join(" ".join(f"{c:g}" for c in p) for p in pts)
+    return f"{mat} polygon {name}\n0\n0\n{3 * len(pts)} {coords}\n"
+
+
+def radiance_scene(light_radius):
+    (x0, y0, z0), (x1, y1, z1) = ROOM_MIN, ROOM_MAX
+    # Vertices counter-clockwise seen from inside the room: normals point inwards.
+    faces = {
+        "floor": [(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0)],
+        "ceiling": [(x0, y0, z1), (x0, y1, z1), (x1, y1, z1), (x1, y0, z1)],
+        "wall_y0": [(x0, y0, z0), (x0, y0, z1), (x1, y0, z1), (x1, y0, z0)],
+        "wall_y1": [(x0, y1, z0), (x1, y1, z0), (x1, y1, z1), (x0, y1, z1)],
+        "wall_x0": [(x0, y0, z0), (x0, y1, z0), (x0, y1, z1), (x0, y0, z1)],
+        "wall_x1": [(x1, y0, z0), (x1, y0, z1), (x1, y1, z1), (x1, y1, z0)],
+    }
+    c, u, v = TABLE
+    add = lambda a, b: tuple(p + q for p, q in zip(a, b))  # noqa: E731
+    table = [c, add(c, u), add(add(c, u), v), add(c, v)]
+    # A sphere of radius r seen from afar has projected area pi r^2: I = L pi r^2 W/sr
+    # per channel, times 179 lm/W (equal RGB: luminance weights sum to 1).
+    L = LIGHT_CD / (LM_PER_W * math.pi * light_radius**2)
+    out = [
+        "# scenes/office.toml for Radiance (benches/radiance/compare.py)\n",
+        f"void plastic wall\n0\n0\n5 {RHO_WALL} {RHO_WALL} {RHO_WALL} 0 0\n",
+        f"void plastic table\n0\n0\n5 {RHO_TABLE} {RHO_TABLE} {RHO_TABLE} 0 0\n",
+        f"void light lamp\n0\n0\n3 {L:.6g} {L:.6g} {L:.6g}\n",
+    ]
+    out += [poly("wall", n, p) for n, p in faces.items()]
+    out.append(poly("table", "table_top", table))
+    lx, ly, lz = LIGHT_POS
+    out.append(f"lamp sphere bulb\n0\n0\n4 {lx:g} {ly:g} {lz:g} {light_radius:g}\n")
+    return "".join(out), L
+
+
+def desk_points():
+    (cx, cy, cz), (ux, _, _), (_, vy, _) = DESK
+    nx, ny = CELLS
+    pts = []
+    for j in range(ny):
+        for i in range(nx):
+            pts.append((cx + (i + 0.5) * ux / nx, cy + (j + 0.5) * vy / ny, cz))
+    return pts  # index j * nx + i
+
+
+def rtrace(tools, octree, points_text, args):
+    cmd = [tools["rtrace"], "-h", "-I+", *args, str(octree)]
+    t0 = time.perf_counter()
+    r = subprocess.run(cmd, input=points_text, capture_output=True, text=True)
+    dt = time.perf_counter() - t0
+    if r.returncode != 0:
+        die(f"rtrace failed ({' '.join(cmd)}):\n{r.stderr}")
+    vals = []
+    for line in r.stdout.split("\n"):
+        f = line.split()
+        if len(f) >= 3:
+            rgb = [float(x) for x in f[:3]]
+            vals.append(LM_PER_W * sum(w * c for w, c in zip(PHOTOMETRIC, rgb)))
+    return vals, dt, cmd
+
+
+def rms(xs):
+    return math.sqrt(sum(x * x for x in xs) / len(xs))
+
+
+def pair_noise(a, b):
+    """Per-run noise of two independent runs: RMS(a - b)/sqrt 2 over cells, relative
+    to the RMS value of the cells (as luxtally's eq. 9 quadratic: RMS sigma/RMS value),
+    and relative to the arithmetic mean too."""
+    sig = rms([x - y for x, y in zip(a, b)]) / math.sqrt(2)
+    m = [(x + y) / 2 for x, y in zip(a, b)]
+    return sig / rms(m), sig / (sum(m) / len(m))
+
+
+# --- luxtally --------------------------------------------------------------------
+def run_luxtally(bin_path, scene, target, threads, outdir):
+    cmd = [
+        str(bin_path), "run", str(scene), "--target-error", str(target),
+        "--photons", "1000000000", "--threads", str(threads), "--quiet", "--out", str(outdir),
+    ]
+    t0 = time.perf_counter()
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if r.returncode != 0:
+        die(f"luxtally failed ({' '.join(cmd)}):\n{r.stdout}\n{r.stderr}")
+    s = json.loads((Path(outdir) / "summary.json").read_text())
+    return s, wall, cmd
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--target", type=float, default=0.01, help="relative per-cell noise (default 0.01)")
+    ap.add_argument("--ab", type=int, default=5)
+    ap.add_argument("--ad-start", type=int, default=64)
+    ap.add_argument("--ad-max", type=int, default=65536)
+    ap.add_argument("--procs", type=int, default=2, help="rtrace -n and luxtally --threads")
+    ap.add_argument("--light-radius", type=float, default=0.01, help="m")
+    ap.add_argument("--workdir", type=Path, default=REPO / "target" / "radiance-compare")
+    ap.add_argument("--radiance-bin", type=Path, help="use this Radiance bin/ instead of pyradiance")
+    ap.add_argument("--raypath", help="RAYPATH with --radiance-bin (its lib/)")
+    ap.add_argument("--luxtally", type=Path, help="luxtally binary (default: cargo build --release)")
+    ap.add_argument("--luxtally-repeats", type=int, default=3, help="luxtally runs timed (default 3)")
+    ap.add_argument("--no-bias-check", action="store_true",
+                    help="skip the run without -ab 5 truncation (-ab 20 -lw 1e-7 -lr 0 -ad 256)")
+    ap.add_argument("--json", type=Path, help="also write all numbers here")
+    a = ap.parse_args()
+
+    work = a.workdir
+    work.mkdir(parents=True, exist_ok=True)
+
+    # Radiance
+    if a.radiance_bin:
+        binpath, raypath, rad_version = a.radiance_bin, a.raypath or os.environ.get("RAYPATH", "."), "local"
+    else:
+        binpath, raypath, rad_version = setup_radiance(work / "venv")
+    os.environ["RAYPATH"] = raypath if "." in raypath.split(os.pathsep) else "." + os.pathsep + raypath
+    tools = find_tools(binpath)
+    log(f"Radiance: {tools['rtrace']} ({rad_version})")
+
+    scene_text, L = radiance_scene(a.light_radius)
+    rad_file = work / "office.rad"
+    rad_file.write_text(scene_text)
+    octree = work / "office.oct"
+    with open(octree, "wb") as f:
+        r = subprocess.run([tools["oconv"], str(rad_file)], stdout=f, stderr=subprocess.PIPE, text=False)
+    if r.returncode != 0:
+        die(f"oconv failed: {r.stderr.decode()}")
+
+    # Check of the source's calibration: direct light only (-ab 0) at the desk centre,
+    # straight below the light, against I/d^2.
+    (cx, cy, cz), (ux, _, _), (_, vy, _) = DESK
+    centre = (cx + ux / 2, cy + vy / 2, cz)
+    d = LIGHT_POS[2] - centre[2]
+    e_expect = LIGHT_CD / d**2
+    (e_ab0,), _, _ = rtrace(tools, octree, "%g %g %g 0 0 1\n" % centre, ["-ab", "0"])
+    calib = e_ab0 / e_expect - 1
+    log(f"light: L = {L:.6g} W/sr/m2 per channel; -ab 0 at desk centre {e_ab0:.3f} lx, "
+        f"I/d^2 = {e_expect:.3f} lx ({calib:+.4%})")
+    if abs(calib) > 0.01:
+        die("the light's calibration is off by more than 1 %")
+
+    pts = desk_points()
+    points_text = "".join(f"{x:.6f} {y:.6f} {z:.6f} 0 0 1\n" for x, y, z in pts)
+
+    search = []
+    ad = a.ad_start
+    final = None
+    while ad <= a.ad_max:
+        args = ["-ab", str(a.ab), "-aa", "0", "-ad", str(ad), "-as", str(ad // 2),
+                "-lw", "1e-4", "-u+", "-n", str(a.procs)]
+        va, ta, cmd = rtrace(tools, octree, points_text, args)
+        vb, tb, _ = rtrace(tools, octree, points_text, args)
+        if len(va) != len(pts) or len(vb) != len(pts):
+            die(f"rtrace returned {len(va)}/{len(vb)} values for {len(pts)} points")
+        q, ar = pair_noise(va, vb)
+        mean = sum(va + vb) / (2 * len(pts))
+        row = dict(ad=ad, times_s=[ta, tb], noise_quadratic=q, noise_arithmetic=ar, mean_lx=mean)
+        search.append(row)
+        log(f"rtrace -ad {ad:6d}: {ta:7.2f} s, {tb:7.2f} s; noise {q:.3%} (RMS sigma/RMS value), "
+            f"{ar:.3%} (/mean); mean {mean:.2f} lx")
+        if q <= a.target:
+            final = dict(row, values_a=va, values_b=vb, cmd=cmd)
+            break
+        ad *= 2
+    if final is None:
+        die(f"Radiance did not reach {a.target:.1%} by -ad {a.ad_max}")
+
+    # How much of the desk's light -ab 5 -lw 1e-4 leaves out: one run with (practically)
+    # no bounce limit. Only its mean over the 2048 cells is used (noise ~0.04 %).
+    bias = None
+    if not a.no_bias_check:
+        args = ["-ab", "20", "-aa", "0", "-ad", "256", "-as", "128", "-lw", "1e-7", "-lr", "0",
+                "-u+", "-n", str(a.procs)]
+        vc, tc, ccmd = rtrace(tools, octree, points_text, args)
+        bias = dict(cmd=ccmd, time_s=tc, mean_lx=sum(vc) / len(vc))
+        log(f"rtrace {' '.join(args)}: {tc:.2f} s; mean {bias['mean_lx']:.2f} lx")
+
+    # luxtally
+    if a.luxtally:
+        lux_bin = a.luxtally
+    else:
+        tdir = Path(os.environ.get("CARGO_TARGET_DIR", REPO / "target"))
+        log(f"cargo build --release (CARGO_TARGET_DIR={tdir})")
+        r = subprocess.run(["cargo", "build", "--release"], cwd=REPO,
+                           env=dict(os.environ, CARGO_TARGET_DIR=str(tdir)))
+        if r.returncode != 0:
+            die("cargo build --release failed")
+        lux_bin = tdir / "release" / "luxtally"
+    lux_out = Path(tempfile.mkdtemp(prefix="luxtally-", dir=work))
+    s, lux_wall, lux_cmd = run_luxtally(lux_bin, REPO / "scenes" / "office.toml", a.target, a.procs, lux_out)
+    lux_times = [(s["elapsed_s"], s["setup_s"], lux_wall)]
+    for _ in range(a.luxtally_repeats - 1):  # timing only; the first run's cells are compared
+        s2, w2, _ = run_luxtally(lux_bin, REPO / "scenes" / "office.toml", a.target, a.procs,
+                                 Path(tempfile.mkdtemp(prefix="luxtally-", dir=work)))
+        lux_times.append((s2["elapsed_s"], s2["setup_s"], w2))
+    log("luxtally runs (photon pass, setup, process): "
+        + "; ".join(f"{e:.3f}, {st:.3f}, {w:.2f} s" for e, st, w in lux_times))
+    desk = s["receivers"]["desk"]
+    lv, ls = desk["values"], desk["sigma"]
+    lux_q = rms(ls) / rms(lv)
+    log(f"luxtally: {s['elapsed_s']:.3f} s photon pass + {s['setup_s']:.3f} s setup, "
+        f"{lux_wall:.2f} s process; {s['photons_emitted']} photons; error {lux_q:.3%}; mean {desk['mean']:.2f} lx")
+
+    # Agreement, cell by cell, against the mean of Radiance's two runs
+    va, vb = final["values_a"], final["values_b"]
+    rv = [(x + y) / 2 for x, y in zip(va, vb)]
+    rad_rel_sigma = final["noise_quadratic"] / math.sqrt(2)  # of the two-run mean
+    rel = [(x - y) / y for x, y in zip(lv, rv)]
+    mean_rel = sum(rel) / len(rel)
+    z = [(x - y) / math.hypot(sx, rad_rel_sigma * y) for x, y, sx in zip(lv, rv, ls)]
+    z_rms = rms(z)
+    # the same after removing the mean ratio: does the shape agree?
+    k = 1 + mean_rel
+    z0 = [(x - k * y) / math.hypot(sx, rad_rel_sigma * k * y) for x, y, sx in zip(lv, rv, ls)]
+    z0_rms = rms(z0)
+    rad_mean = sum(rv) / len(rv)
+
+    t_rad = min(final["times_s"])
+    # Time at exactly the target, interpolated log-log between the last two -ad settings
+    # (noise falls about as 1/N here, not 1/sqrt N: see the search table).
+    t_rad_scaled = None
+    if len(search) >= 2:
+        p1, p2 = search[-2], search[-1]
+        t1, t2 = min(p1["times_s"]), min(p2["times_s"])
+        slope = math.log(t2 / t1) / math.log(p1["noise_quadratic"] / p2["noise_quadratic"])
+        t_rad_scaled = t2 * (p2["noise_quadratic"] / a.target) ** slope
+    rad_settings = "rtrace " + " ".join(final["cmd"][1:-1])
+    print()
+    print(f"Desk receiver, 2048 cells, target {a.target:.0%} (RMS σ / RMS value); "
+          f"{a.procs} processes/threads; {rad_version}")
+    print()
+    print("| tool | settings | wall time to 1 % | error reached | mean desk illuminance |")
+    print("|---|---|---:|---:|---:|")
+    print(f"| Radiance rtrace | `{rad_settings}` | {t_rad:.2f} s (best of 2: "
+          f"{final['times_s'][0]:.2f}, {final['times_s'][1]:.2f} s"
+          + (f"; at exactly {a.target:.0%}, interpolated: {t_rad_scaled:.2f} s" if t_rad_scaled else "") + ") "
+          f"| {final['noise_quadratic']:.2%} | {rad_mean:.2f} lx |")
+    best = min(lux_times, key=lambda t: t[2])
+    print(f"| luxtally | `run --target-error {a.target} --threads {a.procs}` (next_event) | "
+          f"{best[2]:.2f} s process: {best[0]:.3f} s photon pass + {best[1]:.3f} s setup (best of "
+          f"{len(lux_times)}; photon pass {min(t[0] for t in lux_times):.3f}–{max(t[0] for t in lux_times):.3f} s, "
+          f"process {min(t[2] for t in lux_times):.2f}–{max(t[2] for t in lux_times):.2f} s) "
+          f"| {lux_q:.2%} ({s['photons_emitted']:,} photons) | {desk['mean']:.2f} lx |")
+    print()
+    print(f"Agreement (luxtally − Radiance)/Radiance, cell by cell against the mean of Radiance's two runs: "
+          f"mean {mean_rel:+.2%}; z-score RMS {z_rms:.2f} "
+          f"(σ² = σ_luxtally² + σ_Radiance², σ_Radiance = {rad_rel_sigma:.2%} × value); "
+          f"z RMS after scaling Radiance by the mean ratio {z0_rms:.2f}.")
+    if bias:
+        print(f"Without the bounce limit (`rtrace {' '.join(bias['cmd'][1:-1])}`, {bias['time_s']:.1f} s): "
+              f"Radiance's mean {bias['mean_lx']:.2f} lx, {bias['mean_lx'] / rad_mean - 1:+.2%} over -ab 5; "
+              f"luxtally's mean is {desk['mean'] / bias['mean_lx'] - 1:+.2%} over it.")
+    print(f"Light: radius {a.light_radius} m, L = {L:.6g} W/sr/m²; -ab 0 at the desk centre "
+          f"{e_ab0:.3f} lx vs I/d² = {e_expect:.3f} lx ({calib:+.3%}).")
+    print()
+    print("-ad search (two independent runs each):")
+    print()
+    print("| -ad | -as | run times (s) | noise (RMS σ / RMS value) | noise (/ mean) | mean (lx) |")
+    print("|---:|---:|---|---:|---:|---:|")
+    for r in search:
+        print(f"| {r['ad']} | {r['ad'] // 2} | {r['times_s'][0]:.2f}, {r['times_s'][1]:.2f} | "
+              f"{r['noise_quadratic']:.2%} | {r['noise_arithmetic']:.2%} | {r['mean_lx']:.2f} |")
+
+    if a.json:
+        a.json.write_text(json.dumps(dict(
+            radiance=dict(version=rad_version, search=search, time_at_target_interpolated_s=t_rad_scaled, cmd=final["cmd"], mean_lx=rad_mean,
+                          calibration=dict(ab0_lx=e_ab0, expected_lx=e_expect), no_bounce_limit=bias),
+            luxtally=dict(cmd=lux_cmd, elapsed_s=s["elapsed_s"], setup_s=s["setup_s"], process_s=lux_wall,
+                          photons=s["photons_emitted"], error_quadratic=lux_q, runs=lux_times, mean_lx=desk["mean"]),
+            agreement=dict(mean_rel=mean_rel, z_rms=z_rms, z_rms_scaled=z0_rms),
+        ), indent=1))
+
+
+if __name__ == "__main__":
+    main()
