@@ -314,3 +314,78 @@ with_each_estimator!(
     mirror_adds_the_image_of_the_source: 6_000_000, 6_000_000;
     glass_slab_at_normal_incidence_transmits_fresnel_series: 2_000_000, 2_000_000;
 );
+
+/// Receivers lying exactly on a floor (no gap): the illuminance receiver reads the
+/// floor's illuminance, the luminance meter looking at it reads ρE/π, with each estimator.
+fn receivers_lying_on_a_floor_read_its_illuminance_and_luminance(
+    estimator: Estimator,
+    photons: u64,
+) {
+    let (rho, intensity, h) = (0.6, 1000.0, 2.0);
+    let s = run_scene_with(
+        r#"
+        [materials.floor]
+        reflectance = 0.6
+        [[objects]]
+        shape = "rect"
+        corner = [-20, -20, 0]
+        u = [40, 0, 0]
+        v = [0, 40, 0]
+        material = "floor"
+        [[lights]]
+        type = "point"
+        position = [0, 0, 2]
+        intensity_cd = 1000
+        [[receivers]]
+        name = "floor"
+        corner = [-0.5, -0.5, 0]
+        u = [1, 0, 0]
+        v = [0, 1, 0]
+        cells = [8, 8]
+        [[receivers]]
+        name = "meter"
+        corner = [-0.5, -0.5, 0]
+        u = [1, 0, 0]
+        v = [0, 1, 0]
+        cells = [8, 8]
+        quantity = "luminance"
+        view_direction = [0, 0, -1]
+        half_angle_deg = 30
+        "#,
+        photons,
+        estimator,
+    );
+    let e = |i: usize, j: usize| {
+        let (x0, y0) = (-0.5 + i as f64 / 8.0, -0.5 + j as f64 / 8.0);
+        point_source_cell_lx(intensity, h, x0, x0 + 1.0 / 8.0, y0, y0 + 1.0 / 8.0)
+    };
+    for (name, scale) in [("floor", 1.0), ("meter", rho / PI)] {
+        let r = &s.receivers[name];
+        let nu = r.cells[0] as usize;
+        for (k, (v, sigma)) in r.values.iter().zip(&r.sigma).enumerate() {
+            let exact = scale * e(k % nu, k / nu);
+            assert!(*v > 0.0, "{name} cell {k} read nothing");
+            assert!(
+                (v - exact).abs() <= 4.0 * sigma.max(1e-9 * exact),
+                "{name} cell {k}: {v} vs {exact} (σ {sigma})"
+            );
+        }
+    }
+}
+
+mod on_a_floor {
+    use super::*;
+
+    #[test]
+    fn track() {
+        receivers_lying_on_a_floor_read_its_illuminance_and_luminance(Estimator::Track, 8_000_000);
+    }
+
+    #[test]
+    fn next_event() {
+        receivers_lying_on_a_floor_read_its_illuminance_and_luminance(
+            Estimator::NextEvent,
+            8_000_000,
+        );
+    }
+}

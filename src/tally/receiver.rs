@@ -141,15 +141,15 @@ impl ReceiverGrid {
         }
     }
 
-    /// The cell the segment `origin + t·dir`, `0 < t ≤ t_max` (`dir` unit), crosses and
-    /// its score, if it scores. A crossing photon carries flux, not intensity: its score
+    /// The cell the segment `origin + t·dir`, `t_min < t ≤ t_max` (`dir` unit), crosses
+    /// and its score, if it scores. A crossing photon carries flux, not intensity: its score
     /// is the arrival factor over |cos θ| per cell area.
     #[inline]
-    pub fn crossing(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<Crossing> {
+    pub fn crossing(&self, origin: DVec3, dir: DVec3, t_min: f64, t_max: f64) -> Option<Crossing> {
         let factor = self.arrival_factor(dir)?;
         let cos_n = dir.dot(self.normal);
         let t = (self.corner - origin).dot(self.normal) / cos_n;
-        if !(t > 0.0 && t <= t_max) {
+        if !(t > t_min && t <= t_max) {
             return None;
         }
         let rel = origin + dir * t - self.corner;
@@ -258,15 +258,16 @@ mod tests {
         let g = ReceiverGrid::new(&desk(), DVec3::new(1.0, 1.0, 0.0), 10, false);
         // World (2.6, 2.7) → a = 0.8, b = 0.7 → cell (3, 1).
         let o = DVec3::new(1.6, 1.7, 3.0);
-        let c = g.crossing(o, -DVec3::Z, 10.0).unwrap();
+        let c = g.crossing(o, -DVec3::Z, 0.0, 10.0).unwrap();
         assert_eq!(c.cell, 10 + 4 + 3);
         assert!((c.score_per_lm - 1.0 / 0.25).abs() < 1e-12);
         assert!(
-            g.crossing(o, -DVec3::Z, 2.0).is_none(),
+            g.crossing(o, -DVec3::Z, 0.0, 2.0).is_none(),
             "stops before the plane"
         );
         assert!(
-            g.crossing(o - DVec3::Z * 4.0, DVec3::Z, 10.0).is_none(),
+            g.crossing(o - DVec3::Z * 4.0, DVec3::Z, 0.0, 10.0)
+                .is_none(),
             "back face"
         );
         assert_eq!(g.cell_at(0.8, 0.7), c.cell);

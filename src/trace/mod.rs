@@ -224,11 +224,12 @@ impl<'a> Tracer<'a> {
             let origin = DVec3::new(rays.ox[k] as f64, rays.oy[k] as f64, rays.oz[k] as f64);
             let dir = DVec3::new(rays.dx[k] as f64, rays.dy[k] as f64, rays.dz[k] as f64);
             let tri = hits.tri[k];
-            // A receiver lying on the surface hit (within f32 precision) counts the
-            // photon: a receiver placed on a floor measures the floor's illuminance.
+            // A receiver lying on a surface (within f32 precision) counts the photons
+            // that hit the surface and those that leave it: one placed on a floor
+            // measures the floor's illuminance, or its luminance.
             let t_reach = hits.t[k] as f64 + self.receiver_slack;
             for r in &self.receivers {
-                let Some(c) = r.crossing(origin, dir, t_reach) else {
+                let Some(c) = r.crossing(origin, dir, -self.receiver_slack, t_reach) else {
                     continue;
                 };
                 // Next-event receivers take by crossing only what they do not connect:
