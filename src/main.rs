@@ -84,7 +84,8 @@ struct RunArgs {
     /// Output directory (default: out/<scene name>/).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Photons to emit at most (default: the scene's [simulation] photons).
+    /// Photons to emit at most (default: the scene's [simulation] photons; without it and
+    /// without any other stop criterion, 1,000,000).
     #[arg(long)]
     photons: Option<u64>,
     /// Stop after this many seconds of tracing.
@@ -102,6 +103,8 @@ struct RunArgs {
     /// Stop once every cell of the target received this many hits.
     #[arg(long, value_name = "N")]
     min_hits: Option<u64>,
+    /// Random seed (default: the scene's [simulation] seed, else 1): the same seed and
+    /// photons give the same numbers whatever --threads.
     #[arg(long)]
     seed: Option<u64>,
     /// Worker threads (default: all cores). Results do not depend on it.
