@@ -31,11 +31,6 @@ pub struct Material {
 }
 
 impl Material {
-    /// A black (fully absorbing) material.
-    pub fn black(name: &str) -> Self {
-        Material::lambertian(name, 0.0)
-    }
-
     /// A Lambertian reflector of reflectance `rho`.
     pub fn lambertian(name: &str, rho: f64) -> Self {
         Material {
@@ -54,11 +49,6 @@ impl Material {
             + self.transmittance
             + self.specular_reflectance
             + self.specular_transmittance
-    }
-
-    /// True when the material has a specular lobe (mirror or refraction).
-    pub fn is_specular(&self) -> bool {
-        self.specular_reflectance > 0.0 || self.specular_transmittance > 0.0
     }
 }
 
