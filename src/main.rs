@@ -331,7 +331,7 @@ fn photon_pass(
     if let Some(e) = observer.save_error {
         return Err(e);
     }
-    IndirectMap::from_tallies(scene, &result.tallies, result.total_flux_lm)
+    IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
         .save(&out.join(MAP_FILE), scene)?;
     Ok(result)
 }
@@ -365,7 +365,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
         None => {
             let result = photon_pass(&args.run, &scene, &options, caster.as_ref(), setup, &out)?;
             print_run(&args.run, &result.state(&scene, &options), &out);
-            IndirectMap::from_tallies(&scene, &result.tallies, result.total_flux_lm)
+            IndirectMap::from_tallies(&scene, &result.tallies, result.setup.total_flux_lm)
         }
     };
     let r = render::render(

@@ -68,25 +68,32 @@ impl Observer for () {
     fn epoch(&mut self, _: &RunState<'_>) {}
 }
 
+/// What a run settles before its first photon, constant while it runs.
+#[derive(Clone, Debug)]
+pub struct RunSetup {
+    /// Seconds before the photon pass: BVH build and deterministic direct light.
+    pub setup_s: f64,
+    pub total_flux_lm: f64,
+    pub light_flux_lm: Vec<f64>,
+    pub bounce_cap: u32,
+    pub threads: usize,
+    /// Per receiver: scored by next-event estimation (else by track).
+    pub next_event: Vec<bool>,
+    /// Shadow rays and seconds spent on the receivers' deterministic direct light.
+    pub direct_rays: u64,
+    pub direct_s: f64,
+}
+
 /// The state of a run after an epoch.
 pub struct RunState<'a> {
     pub scene: &'a Scene,
     pub options: &'a RunOptions,
+    pub setup: &'a RunSetup,
     pub target: &'a Target,
     pub tallies: &'a Tallies,
     pub history: &'a [HistoryPoint],
     pub forecast: Option<Forecast>,
     pub elapsed_s: f64,
-    pub setup_s: f64,
-    pub total_flux_lm: f64,
-    pub bounce_cap: u32,
-    pub light_flux_lm: &'a [f64],
-    pub threads: usize,
-    /// Per receiver: scored by next-event estimation (else by track).
-    pub next_event: &'a [bool],
-    /// Shadow rays and seconds spent on the receivers' deterministic direct light.
-    pub direct_rays: u64,
-    pub direct_s: f64,
     /// Seconds spent on statistics, forecasts and stop checks, and on merging the
     /// chunks' tallies (all epochs).
     pub stats_s: f64,
@@ -97,20 +104,13 @@ pub struct RunState<'a> {
 
 /// What a finished run hands to the outputs.
 pub struct RunResult {
+    pub setup: RunSetup,
     pub tallies: Tallies,
     pub history: Vec<HistoryPoint>,
     pub forecast: Option<Forecast>,
     pub target: Target,
     pub stop_reason: StopReason,
     pub elapsed_s: f64,
-    pub setup_s: f64,
-    pub total_flux_lm: f64,
-    pub light_flux_lm: Vec<f64>,
-    pub bounce_cap: u32,
-    pub threads: usize,
-    pub next_event: Vec<bool>,
-    pub direct_rays: u64,
-    pub direct_s: f64,
     pub stats_s: f64,
     pub merge_s: f64,
 }
@@ -121,19 +121,12 @@ impl RunResult {
         RunState {
             scene,
             options,
+            setup: &self.setup,
             target: &self.target,
             tallies: &self.tallies,
             history: &self.history,
             forecast: self.forecast,
             elapsed_s: self.elapsed_s,
-            setup_s: self.setup_s,
-            total_flux_lm: self.total_flux_lm,
-            bounce_cap: self.bounce_cap,
-            light_flux_lm: &self.light_flux_lm,
-            threads: self.threads,
-            next_event: &self.next_event,
-            direct_rays: self.direct_rays,
-            direct_s: self.direct_s,
             stats_s: self.stats_s,
             merge_s: self.merge_s,
             stop_reason: Some(self.stop_reason),
@@ -218,12 +211,19 @@ pub fn run_with(
             direct_rays += d.rays;
         }
     }
-    let direct_s = direct_start.elapsed().as_secs_f64();
-    let next_event: Vec<bool> = tracer.receivers.iter().map(|g| g.next_event).collect();
+    let run_setup = RunSetup {
+        setup_s: setup.elapsed().as_secs_f64(),
+        total_flux_lm,
+        light_flux_lm: tracer.emitters.flux_lm.clone(),
+        bounce_cap: tracer.max_bounces,
+        threads,
+        next_event: tracer.receivers.iter().map(|g| g.next_event).collect(),
+        direct_rays,
+        direct_s: direct_start.elapsed().as_secs_f64(),
+    };
     let (mut stats_s, mut merge_s) = (0.0, 0.0);
     let mut history: Vec<HistoryPoint> = Vec::new();
     let mut latest_forecast = None;
-    let setup_s = setup.elapsed().as_secs_f64();
 
     // Chunk tallies are reused from epoch to epoch (in chunk order, so the merge order
     // never changes); each worker thread keeps its own scratch buffers.
@@ -304,19 +304,12 @@ pub fn run_with(
         observer.epoch(&RunState {
             scene,
             options,
+            setup: &run_setup,
             target: &target,
             tallies: &tallies,
             history: &history,
             forecast: latest_forecast,
             elapsed_s,
-            setup_s,
-            total_flux_lm,
-            bounce_cap: tracer.max_bounces,
-            light_flux_lm: &tracer.emitters.flux_lm,
-            threads,
-            next_event: &next_event,
-            direct_rays,
-            direct_s,
             stats_s,
             merge_s,
             stop_reason: reason,
@@ -349,20 +342,13 @@ pub fn run_with(
         );
     };
     Ok(RunResult {
+        setup: run_setup,
         tallies,
         history,
         forecast: latest_forecast,
         target,
         stop_reason,
         elapsed_s: start.elapsed().as_secs_f64(),
-        setup_s,
-        total_flux_lm,
-        light_flux_lm: tracer.emitters.flux_lm.clone(),
-        bounce_cap: tracer.max_bounces,
-        threads,
-        next_event,
-        direct_rays,
-        direct_s,
         stats_s,
         merge_s,
     })

@@ -102,7 +102,7 @@ fn global_odd_even_error_matches_the_actual_map_error() {
             MapKind::Total,
             k,
             g.area_m2[k],
-            result.total_flux_lm,
+            result.setup.total_flux_lm,
             None,
         );
         sum_sq += g.area_m2[k] * (e - exact).powi(2);

@@ -267,7 +267,7 @@ fn scene_map_ply_reads_back_to_the_triangle_map() {
         assert_eq!(vertices.len(), g.vertices.len());
         assert_eq!(faces.len(), g.triangle_count());
         let t = state.tallies;
-        let flux = state.total_flux_lm;
+        let flux = state.setup.total_flux_lm;
         let mut weight = vec![0.0; g.vertices.len()];
         let mut sum = vec![0.0; g.vertices.len()];
         for (k, face) in faces.iter().enumerate() {

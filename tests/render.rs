@@ -80,7 +80,7 @@ fn floor_under_point_source_shows_rho_i_cos_over_pi_r2() {
         ..RunOptions::from_scene(&s)
     };
     let result = run(&s, &options, &AtomicBool::new(false), &mut ()).unwrap();
-    let map = IndirectMap::from_tallies(&s, &result.tallies, result.total_flux_lm);
+    let map = IndirectMap::from_tallies(&s, &result.tallies, result.setup.total_flux_lm);
     assert!(map.face_lx.iter().all(|f| f == &[0.0, 0.0]));
     let r = render_with(&s, &map, Backend::Embree, 2);
     let c = s.camera.as_ref().unwrap();
@@ -262,12 +262,12 @@ fn closed_box_wall_shows_direct_plus_indirect_map() {
         ..RunOptions::from_scene(&s)
     };
     let result = run(&s, &options, &AtomicBool::new(false), &mut ()).unwrap();
-    let map = IndirectMap::from_tallies(&s, &result.tallies, result.total_flux_lm);
+    let map = IndirectMap::from_tallies(&s, &result.tallies, result.setup.total_flux_lm);
     let stats = map_stats(
         &result.tallies,
         MapKind::Indirect,
         &s.geometry.area_m2,
-        result.total_flux_lm,
+        result.setup.total_flux_lm,
     );
     let light = DVec3::new(2.0, 1.5, 1.25);
     let caster = accel::build(Backend::Embree, &s.geometry).unwrap();
@@ -352,7 +352,7 @@ fn office_image_is_stored_as_an_artifact() {
         ..RunOptions::from_scene(&s)
     };
     let result = run(&s, &options, &AtomicBool::new(false), &mut ()).unwrap();
-    let map = IndirectMap::from_tallies(&s, &result.tallies, result.total_flux_lm);
+    let map = IndirectMap::from_tallies(&s, &result.tallies, result.setup.total_flux_lm);
     let r = render_with(&s, &map, Backend::Embree, 2);
     let dir = artifacts_dir().join("office_render");
     std::fs::create_dir_all(&dir).unwrap();
@@ -387,7 +387,7 @@ fn both_backends_give_the_same_image() {
         ..RunOptions::from_scene(&s)
     };
     let result = run(&s, &options, &AtomicBool::new(false), &mut ()).unwrap();
-    let map = IndirectMap::from_tallies(&s, &result.tallies, result.total_flux_lm);
+    let map = IndirectMap::from_tallies(&s, &result.tallies, result.setup.total_flux_lm);
     let a = render_with(&s, &map, Backend::Embree, 2).image;
     let b = render_with(&s, &map, Backend::Obvhs, 2).image;
     // Hit points agree to f32 rounding; a pixel whose ray grazes an edge may see a

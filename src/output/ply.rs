@@ -31,7 +31,9 @@ pub fn face_map(state: &RunState<'_>) -> FaceMap {
         rel_error: Vec::with_capacity(g.triangle_count()),
     };
     for (k, &a) in g.area_m2.iter().enumerate() {
-        let e = |kind, parity| triangle_illuminance_lx(t, kind, k, a, state.total_flux_lm, parity);
+        let e = |kind, parity| {
+            triangle_illuminance_lx(t, kind, k, a, state.setup.total_flux_lm, parity)
+        };
         let total = e(MapKind::Total, None);
         let rel = if n_odd > 0 && n_even > 0 && total > 0.0 {
             (e(MapKind::Total, Some(true)) - e(MapKind::Total, Some(false))).abs() / 2.0 / total

@@ -109,7 +109,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
     let t = state.tallies;
     let mut receivers = BTreeMap::new();
     let mut first = 0usize;
-    for (r, &next_event) in scene.receivers.iter().zip(state.next_event) {
+    for (r, &next_event) in scene.receivers.iter().zip(&state.setup.next_event) {
         let cells = &t.cells[first..first + r.cell_count()];
         first += r.cell_count();
         let stats = receiver_stats(cells, t.photons);
@@ -142,23 +142,23 @@ pub fn build(state: &RunState<'_>) -> Summary {
         );
     }
     let g = &scene.geometry;
-    let total = map_stats(t, MapKind::Total, &g.area_m2, state.total_flux_lm);
-    let indirect = map_stats(t, MapKind::Indirect, &g.area_m2, state.total_flux_lm);
+    let total = map_stats(t, MapKind::Total, &g.area_m2, state.setup.total_flux_lm);
+    let indirect = map_stats(t, MapKind::Indirect, &g.area_m2, state.setup.total_flux_lm);
     Summary {
         scene: scene.name.clone(),
         backend: state.options.backend.name().to_string(),
         seed: state.options.seed,
-        threads: state.threads,
+        threads: state.setup.threads,
         photons_emitted: t.photons,
         rays_traced: t.rays,
         elapsed_s: state.elapsed_s,
-        setup_s: state.setup_s,
+        setup_s: state.setup.setup_s,
         stop_reason: state.stop_reason.map(|r| r.as_str()),
-        total_flux_lm: state.total_flux_lm,
+        total_flux_lm: state.setup.total_flux_lm,
         lights: scene
             .lights
             .iter()
-            .zip(state.light_flux_lm)
+            .zip(&state.setup.light_flux_lm)
             .map(|(l, f)| LightSummary {
                 label: l.label.clone(),
                 flux_lm: *f,
@@ -166,10 +166,10 @@ pub fn build(state: &RunState<'_>) -> Summary {
             .collect(),
         target: state.target.describe(&scene.receivers),
         absolute_error: state.options.absolute,
-        bounce_cap: state.bounce_cap,
+        bounce_cap: state.setup.bounce_cap,
         photons_killed_by_bounce_cap: t.killed_by_bounce_cap,
-        direct_rays: state.direct_rays,
-        direct_s: state.direct_s,
+        direct_rays: state.setup.direct_rays,
+        direct_s: state.setup.direct_s,
         stats_s: state.stats_s,
         merge_s: state.merge_s,
         merge_share: if state.elapsed_s > 0.0 {
@@ -187,7 +187,11 @@ pub fn build(state: &RunState<'_>) -> Summary {
             triangles: g.triangle_count(),
             area_m2: g.total_area_m2(),
             mean_illuminance_lx: total.mean_lx,
-            mean_sigma_lx: mean_illuminance_sigma_lx(t, g.total_area_m2(), state.total_flux_lm),
+            mean_sigma_lx: mean_illuminance_sigma_lx(
+                t,
+                g.total_area_m2(),
+                state.setup.total_flux_lm,
+            ),
             sigma_lx: total.sigma_lx,
             rel_error: total.rel_error,
             indirect_mean_illuminance_lx: indirect.mean_lx,

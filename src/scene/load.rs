@@ -214,8 +214,12 @@ fn required<T: Copy>(x: Option<T>, at: &str, key: &str, what: &str) -> Result<T>
 }
 
 /// Rejects keys that belong to another shape or light type, so a typo'd shape is loud.
-fn forbid(present: &[(&str, bool)], at: &str, what: &str) -> Result<()> {
-    match present.iter().find(|(_, set)| *set) {
+/// Errs on the first key of `present` that is set but not `allowed` for `what`.
+fn forbid(present: &[(&str, bool)], allowed: &[&str], at: &str, what: &str) -> Result<()> {
+    match present
+        .iter()
+        .find(|(key, set)| *set && !allowed.contains(key))
+    {
         Some((key, _)) => Err(Error::input(
             format!("{at}.{key}"),
             format!("does not apply to {what}"),
@@ -268,20 +272,7 @@ fn load_object(
             (mesh, per_tri)
         }
         (None, Some(file)) => {
-            forbid(
-                &[
-                    ("min", o.min.is_some()),
-                    ("max", o.max.is_some()),
-                    ("corner", o.corner.is_some()),
-                    ("u", o.u.is_some()),
-                    ("v", o.v.is_some()),
-                    ("center", o.center.is_some()),
-                    ("radius", o.radius.is_some()),
-                    ("subdivisions", o.subdivisions.is_some()),
-                ],
-                &at,
-                "a mesh file",
-            )?;
+            forbid(&shape_keys(o), &[], &at, "a mesh file")?;
             let mesh_path = base_dir.join(file);
             let loaded = mesh_io::load_mesh(&mesh_path, &format!("{at}.file"))?;
             let per_tri = match override_material {
@@ -355,25 +346,23 @@ fn transform(o: &ObjectFile, at: &str) -> Result<Transform> {
     })
 }
 
+/// The keys of the built-in shapes, and whether an object sets each.
+fn shape_keys(o: &ObjectFile) -> [(&'static str, bool); 8] {
+    [
+        ("min", o.min.is_some()),
+        ("max", o.max.is_some()),
+        ("corner", o.corner.is_some()),
+        ("u", o.u.is_some()),
+        ("v", o.v.is_some()),
+        ("center", o.center.is_some()),
+        ("radius", o.radius.is_some()),
+        ("subdivisions", o.subdivisions.is_some()),
+    ]
+}
+
 fn builtin_shape(o: &ObjectFile, shape: &str, at: &str) -> Result<Mesh> {
     let what = format!("shape \"{shape}\"");
-    let keys = |allowed: &[&str]| {
-        let all = [
-            ("min", o.min.is_some()),
-            ("max", o.max.is_some()),
-            ("corner", o.corner.is_some()),
-            ("u", o.u.is_some()),
-            ("v", o.v.is_some()),
-            ("center", o.center.is_some()),
-            ("radius", o.radius.is_some()),
-            ("subdivisions", o.subdivisions.is_some()),
-        ];
-        let others: Vec<_> = all
-            .into_iter()
-            .filter(|(k, _)| !allowed.contains(k))
-            .collect();
-        forbid(&others, at, &what)
-    };
+    let keys = |allowed: &[&str]| forbid(&shape_keys(o), allowed, at, &what);
     match shape {
         "box" => {
             keys(&["min", "max"])?;
@@ -444,26 +433,20 @@ fn amount(x: f64, at: &str, key: &str) -> Result<f64> {
 
 fn light_kind(l: &LightFile, at: &str) -> Result<LightKind> {
     let what = format!("type \"{}\" lights", l.kind);
-    let set = |allowed: &[&str]| {
-        let all = [
-            ("position", l.position.is_some()),
-            ("direction", l.direction.is_some()),
-            ("intensity_cd", l.intensity_cd.is_some()),
-            ("flux_lm", l.flux_lm.is_some()),
-            ("cone_deg", l.cone_deg.is_some()),
-            ("falloff_deg", l.falloff_deg.is_some()),
-            ("illuminance_lx", l.illuminance_lx.is_some()),
-            ("corner", l.corner.is_some()),
-            ("u", l.u.is_some()),
-            ("v", l.v.is_some()),
-            ("luminance_cdm2", l.luminance_cdm2.is_some()),
-        ];
-        let others: Vec<_> = all
-            .into_iter()
-            .filter(|(k, _)| !allowed.contains(k))
-            .collect();
-        forbid(&others, at, &what)
-    };
+    let light_keys = [
+        ("position", l.position.is_some()),
+        ("direction", l.direction.is_some()),
+        ("intensity_cd", l.intensity_cd.is_some()),
+        ("flux_lm", l.flux_lm.is_some()),
+        ("cone_deg", l.cone_deg.is_some()),
+        ("falloff_deg", l.falloff_deg.is_some()),
+        ("illuminance_lx", l.illuminance_lx.is_some()),
+        ("corner", l.corner.is_some()),
+        ("u", l.u.is_some()),
+        ("v", l.v.is_some()),
+        ("luminance_cdm2", l.luminance_cdm2.is_some()),
+    ];
+    let set = |allowed: &[&str]| forbid(&light_keys, allowed, at, &what);
     match l.kind.as_str() {
         "point" => {
             set(&["position", "intensity_cd", "flux_lm"])?;
