@@ -108,10 +108,13 @@ pub fn build(state: &RunState<'_>) -> Summary {
     let scene = state.scene;
     let t = state.tallies;
     let mut receivers = BTreeMap::new();
-    let mut first = 0usize;
-    for (r, &next_event) in scene.receivers.iter().zip(&state.setup.next_event) {
-        let cells = &t.cells[first..first + r.cell_count()];
-        first += r.cell_count();
+    for (index, (r, &next_event)) in scene
+        .receivers
+        .iter()
+        .zip(&state.setup.next_event)
+        .enumerate()
+    {
+        let cells = t.receiver_cells(&scene.receivers, index);
         let stats = receiver_stats(cells, t.photons);
         let max_vov = cells
             .iter()
