@@ -563,13 +563,15 @@ pub fn bench_accuracy(
     );
     let _ = writeln!(
         out,
-        "Stopped on {} after {:.3} s, {} photons, {} rays; direct light {:.3} s ({} shadow rays); statistics and forecasts {:.4} s = {:.3} % of the run; merging {:.4} s = {:.3} %; FOM {:.0} (stable: {}), VOV {:.4}.\n",
+        "Stopped on {} after {:.3} s (set-up {:.3} s), {} photons, {} rays; direct light {:.3} s ({} replicates, {} shadow rays); statistics and forecasts {:.4} s = {:.3} % of the run; merging {:.4} s = {:.3} %; FOM {:.0} (stable: {}), VOV {:.4}.\n",
         result.stop_reason.as_str(),
         result.elapsed_s,
+        result.setup.setup_s,
         result.tallies.photons,
         result.tallies.rays,
-        result.setup.direct_s,
-        result.setup.direct_rays,
+        result.direct_s,
+        result.tallies.direct_replicates,
+        result.tallies.direct_rays,
         result.stats_s,
         100.0 * result.stats_s / result.elapsed_s.max(1e-9),
         result.merge_s,

@@ -410,13 +410,21 @@ fn print_run(args: &RunArgs, state: &RunState<'_>, out: &Path) {
             out.display()
         );
         for (name, r) in &s.receivers {
-            println!(
-                "  receiver {name}: mean {:.4} {}, error {:.2} % (arithmetic) {:.2} % (quadratic)",
-                r.mean,
-                r.unit,
-                100.0 * r.rel_error.arithmetic,
-                100.0 * r.rel_error.quadratic
-            );
+            let error = if r.unknown_cells == 0 {
+                format!(
+                    "error {:.2} % (arithmetic) {:.2} % (quadratic)",
+                    100.0 * r.rel_error.arithmetic,
+                    100.0 * r.rel_error.quadratic
+                )
+            } else {
+                format!(
+                    "error unknown: {} of {} cells without a score ({:.2} % over the others)",
+                    r.unknown_cells,
+                    r.values.len(),
+                    100.0 * r.rel_error_known_cells.quadratic
+                )
+            };
+            println!("  receiver {name}: mean {:.4} {}, {error}", r.mean, r.unit);
         }
         println!(
             "  global: {} triangles, mean {:.4} lx, error {:.2} %",

@@ -24,3 +24,15 @@ pub fn photon_stream(seed: u64, index: u64) -> Pcg32 {
 pub fn aux_stream(seed: u64) -> Pcg32 {
     Pcg32::seed_from_u64(mix64(seed ^ 0xdead_beef_cafe_f00d))
 }
+
+/// The random stream of direct-light replicate `replicate` of receiver cell `cell` (a
+/// global cell index) in a run seeded with `seed`: disjoint from the photons' streams,
+/// so the direct light never depends on threads, epochs or photons. Distinct for cells
+/// and replicates below 2³².
+#[inline]
+pub fn direct_stream(seed: u64, cell: u64, replicate: u64) -> Pcg32 {
+    photon_stream(
+        mix64(seed ^ 0x6a09_e667_f3bc_c909),
+        (cell << 32) ^ replicate,
+    )
+}

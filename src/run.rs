@@ -7,7 +7,7 @@ use crate::stats::forecast::{forecast, Forecast, HistoryPoint};
 use crate::stats::stop::{min_hits, receiver_target_error, StopReason, Target};
 use crate::stats::{map_stats, MapKind};
 use crate::tally::{ChunkTally, Tallies};
-use crate::trace::direct::direct_light;
+use crate::trace::direct::{relative_variances, DirectLight, DirectSchedule, PILOT_REPLICATES};
 use crate::trace::{Scratch, Tracer, CHUNK_PHOTONS};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -79,9 +79,6 @@ pub struct RunSetup {
     pub threads: usize,
     /// Per receiver: scored by next-event estimation (else by track).
     pub next_event: Vec<bool>,
-    /// Shadow rays and seconds spent on the receivers' deterministic direct light.
-    pub direct_rays: u64,
-    pub direct_s: f64,
 }
 
 /// The state of a run after an epoch.
@@ -94,10 +91,12 @@ pub struct RunState<'a> {
     pub history: &'a [HistoryPoint],
     pub forecast: Option<Forecast>,
     pub elapsed_s: f64,
-    /// Seconds spent on statistics, forecasts and stop checks, and on merging the
-    /// chunks' tallies (all epochs).
+    /// Seconds spent on statistics, forecasts and stop checks, on merging the chunks'
+    /// tallies and on the next-event receivers' direct light (all epochs; the direct
+    /// light's pilot replicates count in `setup.setup_s` too).
     pub stats_s: f64,
     pub merge_s: f64,
+    pub direct_s: f64,
     /// Set on the last epoch.
     pub stop_reason: Option<StopReason>,
 }
@@ -113,6 +112,7 @@ pub struct RunResult {
     pub elapsed_s: f64,
     pub stats_s: f64,
     pub merge_s: f64,
+    pub direct_s: f64,
 }
 
 impl RunResult {
@@ -129,6 +129,7 @@ impl RunResult {
             elapsed_s: self.elapsed_s,
             stats_s: self.stats_s,
             merge_s: self.merge_s,
+            direct_s: self.direct_s,
             stop_reason: Some(self.stop_reason),
         }
     }
@@ -200,17 +201,15 @@ pub fn run_with(
     let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
     let total_flux_lm = tracer.emitters.total_flux_lm;
     let mut tallies = Tallies::new(scene.geometry.triangle_count(), tracer.cell_count());
-    let direct_start = Instant::now();
-    let mut direct_rays = 0;
-    for grid in tracer.receivers.iter().filter(|g| g.next_event) {
-        let first = grid.first_cell as usize;
-        let cells =
-            pool.install(|| direct_light(grid, &tracer.emitters, caster, tracer.receiver_slack));
-        for (sums, d) in tallies.cells[first..].iter_mut().zip(cells) {
-            (sums.direct, sums.direct_sigma) = (d.value, d.sigma);
-            direct_rays += d.rays;
-        }
-    }
+    tallies.dark = !(total_flux_lm > 0.0);
+    let direct = DirectLight {
+        emitters: &tracer.emitters,
+        caster,
+        slack: tracer.receiver_slack,
+        seed: options.seed,
+    };
+    let mut direct_schedule = DirectSchedule { per_photon: 0.0 };
+    let mut direct_s = add_direct(&tracer, &direct, &mut tallies, PILOT_REPLICATES, &pool);
     let run_setup = RunSetup {
         setup_s: setup.elapsed().as_secs_f64(),
         total_flux_lm,
@@ -218,8 +217,6 @@ pub fn run_with(
         bounce_cap: tracer.max_bounces,
         threads,
         next_event: tracer.receivers.iter().map(|g| g.next_event).collect(),
-        direct_rays,
-        direct_s: direct_start.elapsed().as_secs_f64(),
     };
     let (mut stats_s, mut merge_s) = (0.0, 0.0);
     let mut history: Vec<HistoryPoint> = Vec::new();
@@ -231,7 +228,10 @@ pub fn run_with(
     let start = Instant::now();
     let mut epoch_photons = CHUNK_PHOTONS * threads as u64;
     let stop_reason = loop {
-        let count = epoch_photons.min(max_photons - tallies.photons);
+        // Epochs end at every schedule point, so every run passes through them.
+        let count = epoch_photons
+            .min(max_photons - tallies.photons)
+            .min(next_schedule_point(tallies.photons) - tallies.photons);
         let epoch_start = Instant::now();
         let chunks: Vec<(u64, u32)> = (0..count.div_ceil(CHUNK_PHOTONS))
             .map(|c| {
@@ -261,6 +261,11 @@ pub fn run_with(
             tallies.accumulate(chunk, n as u64);
         }
         merge_s += merge_start.elapsed().as_secs_f64();
+        if tallies.photons.is_power_of_two() && tallies.photons >= CHUNK_PHOTONS {
+            direct_schedule = schedule_direct(&tracer, &tallies);
+        }
+        let wanted = direct_schedule.wanted(tallies.photons, tallies.direct_replicates);
+        direct_s += add_direct(&tracer, &direct, &mut tallies, wanted, &pool);
         let elapsed_s = start.elapsed().as_secs_f64();
         let stats_start = Instant::now();
 
@@ -312,6 +317,7 @@ pub fn run_with(
             elapsed_s,
             stats_s,
             merge_s,
+            direct_s,
             stop_reason: reason,
         });
         if let Some(reason) = reason {
@@ -351,7 +357,60 @@ pub fn run_with(
         elapsed_s: start.elapsed().as_secs_f64(),
         stats_s,
         merge_s,
+        direct_s,
     })
+}
+
+/// Tops the next-event receivers' direct light up to `wanted` replicates; returns the
+/// seconds it took.
+fn add_direct(
+    tracer: &Tracer<'_>,
+    direct: &DirectLight<'_>,
+    tallies: &mut Tallies,
+    wanted: u64,
+    pool: &rayon::ThreadPool,
+) -> f64 {
+    let first = tallies.direct_replicates;
+    if wanted <= first {
+        return 0.0;
+    }
+    let start = Instant::now();
+    for grid in tracer.receivers.iter().filter(|g| g.next_event) {
+        let cells = &mut tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
+        tallies.direct_rays +=
+            pool.install(|| direct.add_replicates(grid, cells, first, wanted - first));
+    }
+    tallies.direct_replicates = wanted;
+    start.elapsed().as_secs_f64()
+}
+
+/// The direct light's replicates per photon, from the tallies at a schedule point.
+fn schedule_direct(tracer: &Tracer<'_>, tallies: &Tallies) -> DirectSchedule {
+    let (mut a, mut b) = (0.0, 0.0);
+    for grid in tracer.receivers.iter().filter(|g| g.next_event) {
+        let cells = &tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
+        let (ga, gb) = relative_variances(cells, tallies.photons, tallies.direct_replicates);
+        (a, b) = (a + ga, b + gb);
+    }
+    DirectSchedule::from_variances(
+        a,
+        b,
+        tallies.direct_rays as f64 / tallies.direct_replicates.max(1) as f64,
+        tallies.rays as f64 / tallies.photons.max(1) as f64,
+    )
+}
+
+/// The next photon count after `done` at which the direct light's schedule is revised:
+/// `CHUNK_PHOTONS`·2^k.
+fn next_schedule_point(done: u64) -> u64 {
+    let mut point = CHUNK_PHOTONS;
+    while point <= done {
+        match point.checked_mul(2) {
+            Some(p) => point = p,
+            None => return u64::MAX,
+        }
+    }
+    point
 }
 
 /// The target's error now: the global map's odd/even error, or the receiver's.
@@ -380,7 +439,7 @@ fn target_error(
             target,
             &scene.receivers,
             tallies.receiver_cells(&scene.receivers, r),
-            tallies.photons,
+            tallies.counts(),
             absolute,
         ),
     }

@@ -11,8 +11,14 @@ use luxtally::stats::{triangle_illuminance_lx, MapKind};
 use std::f64::consts::PI;
 use std::sync::atomic::AtomicBool;
 
-/// A point source 2 m over a black plane, with a receiver of `nu × nv` cells.
+/// A point source 2 m over a black plane, with a receiver of `nu × nv` cells scored by
+/// the analog (`track`) estimator, whose error falls with the photons alone.
 fn point_over_plane(nu: u32, nv: u32) -> String {
+    point_over_plane_scored(nu, nv, "track")
+}
+
+/// [`point_over_plane`] with the receiver's `estimator`.
+fn point_over_plane_scored(nu: u32, nv: u32, estimator: &str) -> String {
     format!(
         r#"
         [materials.black]
@@ -33,6 +39,7 @@ fn point_over_plane(nu: u32, nv: u32) -> String {
         u = [2, 0, 0]
         v = [0, 2, 0]
         cells = [{nu}, {nv}]
+        estimator = "{estimator}"
         "#
     )
 }
@@ -47,15 +54,18 @@ fn point_over_plane_exact(nu: u32, nv: u32) -> impl Fn(usize, usize) -> f64 {
 
 #[test]
 fn receiver_sigma_is_calibrated_68_percent_within_one_sigma() {
-    let s = run_scene(&point_over_plane(32, 32), 8_000_000);
-    let z = z_scores(&s.receivers["r"], point_over_plane_exact(32, 32));
-    assert_calibrated(&z, "32 × 32 receiver");
-    let inside = z.iter().filter(|x| x.abs() <= 1.0).count() as f64 / z.len() as f64;
-    assert!(
-        (0.62..=0.74).contains(&inside),
-        "{:.1} % of cells within 1σ",
-        100.0 * inside
-    );
+    // The analog estimator, then the sampled direct light of next-event receivers.
+    for (estimator, photons) in [("track", 8_000_000), ("next_event", 1_000_000)] {
+        let s = run_scene(&point_over_plane_scored(32, 32, estimator), photons);
+        let z = z_scores(&s.receivers["r"], point_over_plane_exact(32, 32));
+        assert_calibrated(&z, &format!("32 × 32 receiver, {estimator}"));
+        let inside = z.iter().filter(|x| x.abs() <= 1.0).count() as f64 / z.len() as f64;
+        assert!(
+            (0.62..=0.74).contains(&inside),
+            "{estimator}: {:.1} % of cells within 1σ",
+            100.0 * inside
+        );
+    }
 }
 
 /// Solid angle of the triangle (a, b, c) seen from the origin (Van Oosterom & Strackee).

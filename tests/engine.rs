@@ -120,8 +120,15 @@ fn tiny_and_huge_rooms_give_the_same_illuminance_after_scaling() {
 
 /// Every number of a summary, as JSON, is finite (serde_json writes NaN as null).
 fn assert_all_finite(s: &luxtally::output::summary::Summary) {
+    assert_finite_except(s, &[]);
+}
+
+/// [`assert_all_finite`], but keys whose path contains one of `unknown` may be null
+/// (an unknown error).
+fn assert_finite_except(s: &luxtally::output::summary::Summary, unknown: &[&str]) {
     let json = serde_json::to_value(s).unwrap();
-    fn walk(v: &serde_json::Value, path: &str) {
+    walk(&json, "", unknown);
+    fn walk(v: &serde_json::Value, path: &str, unknown: &[&str]) {
         match v {
             serde_json::Value::Number(n) => {
                 assert!(n.as_f64().is_some_and(f64::is_finite), "{path}: {n}")
@@ -129,17 +136,20 @@ fn assert_all_finite(s: &luxtally::output::summary::Summary) {
             serde_json::Value::Array(a) => a
                 .iter()
                 .enumerate()
-                .for_each(|(i, x)| walk(x, &format!("{path}[{i}]"))),
-            serde_json::Value::Object(o) => {
-                o.iter().for_each(|(k, x)| walk(x, &format!("{path}.{k}")))
-            }
-            serde_json::Value::Null if path != ".forecast" && !path.ends_with("stop_reason") => {
+                .for_each(|(i, x)| walk(x, &format!("{path}[{i}]"), unknown)),
+            serde_json::Value::Object(o) => o
+                .iter()
+                .for_each(|(k, x)| walk(x, &format!("{path}.{k}"), unknown)),
+            serde_json::Value::Null
+                if path != ".forecast"
+                    && !path.ends_with("stop_reason")
+                    && !unknown.iter().any(|u| path.contains(u)) =>
+            {
                 panic!("{path} is null")
             }
             _ => {}
         }
     }
-    walk(&json, "");
 }
 
 #[test]
@@ -168,6 +178,7 @@ fn zero_flux_lights_give_zeros_not_nan() {
     );
     assert_eq!(s.total_flux_lm, 0.0);
     assert_eq!(s.receivers["r"].values, vec![0.0; 4]);
+    assert_eq!(s.receivers["r"].sigma, vec![0.0; 4], "no light: exactly 0");
     assert_eq!(s.global.mean_illuminance_lx, 0.0);
     assert_all_finite(&s);
 }
@@ -221,8 +232,15 @@ fn receiver_no_photon_reaches_reads_zero_with_unknown_error() {
     let r = &s.receivers["outside"];
     assert_eq!(r.values, vec![0.0; 9]);
     assert_eq!(r.hits, vec![0; 9]);
-    assert_eq!(r.rel_error.arithmetic, luxtally::stats::REL_ERROR_UNKNOWN);
-    assert_all_finite(&s);
+    assert!(r.sigma.iter().all(|x| x.is_nan()), "σ unknown, not 0");
+    assert_eq!(r.unknown_cells, 9);
+    assert!(r.rel_error.arithmetic.is_nan());
+    // Only the unknown errors are null: σ, the receiver's mean error and the history
+    // of the target's error.
+    assert_finite_except(
+        &s,
+        &[".sigma", ".rel_error", ".rel_error_known_cells", ".history"],
+    );
 }
 
 /// The cross-check that no path is missed or counted twice: the analog estimator and
@@ -310,7 +328,7 @@ fn track_and_next_event_agree_beside_walls_and_through_glass() {
 }
 
 #[test]
-fn auto_estimator_picks_next_event_only_where_diffuse_paths_exist() {
+fn auto_estimator_is_next_event_with_sampled_direct_light_everywhere() {
     let office = run_options(&office(), &options(&office(), 10_000, 2, Backend::Embree));
     assert_eq!(office.receivers["desk"].estimator, "next_event");
     let black = run_scene(
@@ -336,5 +354,10 @@ fn auto_estimator_picks_next_event_only_where_diffuse_paths_exist() {
         "#,
         10_000,
     );
-    assert_eq!(black.receivers["r"].estimator, "track");
+    // No diffuse path: the direct light is still sampled, not left to crossings.
+    let r = &black.receivers["r"];
+    assert_eq!(
+        (r.estimator, r.direct_estimator, r.indirect_estimator),
+        ("next_event", "sampled", "next_event")
+    );
 }

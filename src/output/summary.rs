@@ -5,8 +5,8 @@ use crate::scene::Quantity;
 use crate::stats::forecast::HistoryPoint;
 use crate::stats::stop::Target;
 use crate::stats::{
-    figure_of_merit, map_stats, mean_illuminance_sigma_lx, mean_illuminance_vov, receiver_stats,
-    reliability, variance_of_variance, Averaged, MapKind, Reliability,
+    cell_estimate, cell_vov, figure_of_merit, map_stats, mean_illuminance_sigma_lx,
+    mean_illuminance_vov, receiver_stats, reliability, Averaged, MapKind, Reliability,
 };
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -19,8 +19,9 @@ pub struct Summary {
     pub threads: usize,
     pub photons_emitted: u64,
     pub rays_traced: u64,
-    /// Wall time of the photon pass (s); `setup_s` is what came before it: BVH build and
-    /// the next-event receivers' deterministic direct light (`direct_s` of it).
+    /// Wall time of the photon pass (s), including the direct light's replicates added
+    /// during it; `setup_s` is what came before it: BVH build and the direct light's
+    /// pilot replicates.
     pub elapsed_s: f64,
     pub setup_s: f64,
     /// Null while the run is still going (a summary saved mid-run).
@@ -33,8 +34,9 @@ pub struct Summary {
     pub absolute_error: bool,
     pub bounce_cap: u32,
     pub photons_killed_by_bounce_cap: u64,
-    /// Shadow rays and seconds of the next-event receivers' deterministic direct light
-    /// (computed once, before the photons).
+    /// The next-event receivers' sampled direct light: replicates per cell, their
+    /// shadow rays (not in `rays_traced`) and seconds (before and during the photons).
+    pub direct_replicates: u64,
     pub direct_rays: u64,
     pub direct_s: f64,
     /// Seconds of statistics, forecasts and stop checks over all epochs, and their
@@ -64,17 +66,28 @@ pub struct ReceiverSummary {
     pub unit: &'static str,
     /// `track` or `next_event` (what `auto` resolved to).
     pub estimator: &'static str,
-    /// The deterministic direct part of `values` (0 for track receivers) and the
-    /// largest residual error of its quadrature, in the receiver's unit.
+    /// How the light arriving straight from the sources is scored: `sampled` (the
+    /// direct-light replicates, next_event) or `track`.
+    pub direct_estimator: &'static str,
+    /// How the light arriving after scattering is scored: `next_event` (connections from
+    /// diffuse vertices, crossings after specular ones and near the receiver) or `track`.
+    pub indirect_estimator: &'static str,
+    /// The sampled direct part of `values` (0 for track receivers) and its σ, in the
+    /// receiver's unit.
     pub direct: Vec<f64>,
-    pub direct_sigma_max: f64,
+    pub direct_sigma: Vec<f64>,
     pub cells: [u32; 2],
     /// Index j * cells[0] + i.
     pub values: Vec<f64>,
+    /// null where the error is unknown: nothing scored in the cell.
     pub sigma: Vec<f64>,
     pub hits: Vec<u64>,
     pub mean: f64,
+    /// Eq. 9; null while some cell's error is unknown (`unknown_cells`).
     pub rel_error: Averaged,
+    /// Eq. 9 over the cells whose error is known.
+    pub rel_error_known_cells: Averaged,
+    pub unknown_cells: usize,
     /// Figure of merit 1/(σ_rel²·t) of the quadratic mean error.
     pub fom: f64,
     /// Largest variance of the variance over the cells that scored (MCNP's check:
@@ -115,11 +128,22 @@ pub fn build(state: &RunState<'_>) -> Summary {
         .enumerate()
     {
         let cells = t.receiver_cells(&scene.receivers, index);
-        let stats = receiver_stats(cells, t.photons);
+        let stats = receiver_stats(cells, t.counts());
+        let direct: Vec<(f64, f64)> = cells
+            .iter()
+            .map(|c| {
+                let (sum, sum_sq) = c.direct_sums();
+                if t.direct_replicates == 0 {
+                    (0.0, 0.0)
+                } else {
+                    cell_estimate(sum, sum_sq, t.direct_replicates)
+                }
+            })
+            .collect();
         let max_vov = cells
             .iter()
             .filter(|c| c.hits > 0)
-            .map(|c| variance_of_variance(c.moments.map(|m| m.value()), t.photons))
+            .map(|c| cell_vov(c, t.counts()))
             .fold(0.0, f64::max);
         let (quantity, unit) = match r.quantity {
             Quantity::Illuminance => ("illuminance", "lx"),
@@ -131,14 +155,18 @@ pub fn build(state: &RunState<'_>) -> Summary {
                 quantity,
                 unit,
                 estimator: if next_event { "next_event" } else { "track" },
-                direct: cells.iter().map(|c| c.direct).collect(),
-                direct_sigma_max: cells.iter().map(|c| c.direct_sigma).fold(0.0, f64::max),
+                direct_estimator: if next_event { "sampled" } else { "track" },
+                indirect_estimator: if next_event { "next_event" } else { "track" },
+                direct: direct.iter().map(|d| d.0).collect(),
+                direct_sigma: direct.iter().map(|d| d.1).collect(),
                 cells: r.cells,
                 values: stats.values,
                 sigma: stats.sigma,
                 hits: stats.hits,
                 mean: stats.mean,
                 rel_error: stats.rel_error,
+                rel_error_known_cells: stats.rel_error_known,
+                unknown_cells: stats.unknown_cells,
                 fom: figure_of_merit(stats.rel_error.quadratic, state.elapsed_s),
                 max_vov,
             },
@@ -154,6 +182,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
         threads: state.setup.threads,
         photons_emitted: t.photons,
         rays_traced: t.rays,
+        direct_replicates: t.direct_replicates,
         elapsed_s: state.elapsed_s,
         setup_s: state.setup.setup_s,
         stop_reason: state.stop_reason.map(|r| r.as_str()),
@@ -171,8 +200,8 @@ pub fn build(state: &RunState<'_>) -> Summary {
         absolute_error: state.options.absolute,
         bounce_cap: state.setup.bounce_cap,
         photons_killed_by_bounce_cap: t.killed_by_bounce_cap,
-        direct_rays: state.setup.direct_rays,
-        direct_s: state.setup.direct_s,
+        direct_rays: t.direct_rays,
+        direct_s: state.direct_s,
         stats_s: state.stats_s,
         merge_s: state.merge_s,
         merge_share: if state.elapsed_s > 0.0 {
@@ -230,7 +259,7 @@ fn target_vov(state: &RunState<'_>) -> f64 {
         .iter()
         .map(|&c| &cells[c])
         .filter(|c| c.hits > 0)
-        .map(|c| variance_of_variance(c.moments.map(|m| m.value()), t.photons))
+        .map(|c| cell_vov(c, t.counts()))
         .collect();
     if vov.is_empty() {
         return 1.0;

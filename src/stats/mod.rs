@@ -4,31 +4,84 @@
 pub mod forecast;
 pub mod stop;
 
-use crate::tally::{CellSums, Tallies, CODES_PER_TRIANGLE};
+use crate::tally::{CellSums, Counts, Tallies, CODES_PER_TRIANGLE};
 
-/// Relative error reported when nothing has been scored yet (value 0): 100 %, so no
-/// relative target can be met by a quantity nothing has reached.
+/// Relative error reported for a value of 0 whose σ is known: 100 %, so no relative
+/// target can be met by a quantity nothing has reached.
 pub const REL_ERROR_UNKNOWN: f64 = 1.0;
 
 /// Estimate and standard error of one cell from its history moments, N histories
 /// (eqs. 6–7, with the unbiased N/(N−1) variance). Returns (value, sigma) in the score's
-/// unit: value = Σx/N, sigma = sqrt(Var(x)/N).
+/// unit: value = Σx/N, sigma = sqrt(Var(x)/N); sigma is NaN (unknown) below 2 histories.
 pub fn cell_estimate(sum: f64, sum_sq: f64, n: u64) -> (f64, f64) {
     if n == 0 {
-        return (0.0, 0.0);
+        return (0.0, f64::NAN);
     }
     let nf = n as f64;
     let mean = sum / nf;
     if n == 1 {
-        return (mean, 0.0);
+        return (mean, f64::NAN);
     }
     let variance = ((sum_sq / nf - mean * mean) * nf / (nf - 1.0)).max(0.0);
     (mean, (variance / nf).sqrt())
 }
 
-/// σ_rel of a value (eq. 8), [`REL_ERROR_UNKNOWN`] for a zero value.
+/// A cell's value and σ: the photons' estimate (eqs. 6–7 over the histories) plus the
+/// sampled direct light (the same equations over its replicates); the two are
+/// independent, so their variances add. σ is NaN (unknown) when nothing has scored in
+/// the cell, neither a photon nor a non-zero direct sample, so its error cannot be
+/// estimated, whatever its true value (unless the scene emits no light at all).
+pub fn cell_value(c: &CellSums, counts: Counts) -> (f64, f64) {
+    let Counts {
+        photons,
+        direct_replicates: replicates,
+        dark,
+    } = counts;
+    if c.hits == 0 {
+        return (0.0, if dark { 0.0 } else { f64::NAN });
+    }
+    let (direct_sum, direct_sum_sq) = c.direct_sums();
+    let (photon_value, photon_sigma) = cell_estimate(c.sum(), c.sum_sq(), photons);
+    let (direct_value, direct_sigma) = if replicates == 0 {
+        (0.0, 0.0)
+    } else {
+        cell_estimate(direct_sum, direct_sum_sq, replicates)
+    };
+    (
+        photon_value + direct_value,
+        photon_sigma.hypot(direct_sigma),
+    )
+}
+
+/// VOV of a cell's value (photon part plus direct part): the parts are independent, so
+/// the variance of its variance estimate is the sum of theirs,
+/// VOV = (VOV_p·σ_p⁴ + VOV_d·σ_d⁴)/(σ_p² + σ_d²)²; 1 when nothing is known.
+pub fn cell_vov(c: &CellSums, counts: Counts) -> f64 {
+    let (photons, replicates) = (counts.photons, counts.direct_replicates);
+    let part = |moments: [f64; 4], n: u64| {
+        let (_, sigma) = cell_estimate(moments[0], moments[1], n);
+        if moments[1] > 0.0 && sigma > 0.0 {
+            (variance_of_variance(moments, n), sigma * sigma)
+        } else {
+            (0.0, 0.0)
+        }
+    };
+    let (vov_p, var_p) = part(c.moments.map(|m| m.value()), photons);
+    let (vov_d, var_d) = part(c.direct.map(|m| m.value()), replicates);
+    let var = var_p + var_d;
+    if var > 0.0 {
+        (vov_p * var_p * var_p + vov_d * var_d * var_d) / (var * var)
+    } else {
+        1.0
+    }
+}
+
+/// σ_rel of a value (eq. 8): NaN when σ is unknown, [`REL_ERROR_UNKNOWN`] for a zero
+/// value.
 pub fn relative_error(value: f64, sigma: f64) -> f64 {
-    if value > 0.0 {
+    if sigma.is_nan() {
+        f64::NAN
+    } else if value > 0.0 {
         sigma / value
     } else {
         REL_ERROR_UNKNOWN
@@ -67,8 +120,8 @@ pub fn mean_error(values: &[f64], sigmas: &[f64]) -> (f64, Averaged) {
         return (
             0.0,
             Averaged {
-                arithmetic: REL_ERROR_UNKNOWN,
-                quadratic: REL_ERROR_UNKNOWN,
+                arithmetic: f64::NAN,
+                quadratic: f64::NAN,
             },
         );
     }
@@ -89,26 +142,39 @@ pub fn mean_error(values: &[f64], sigmas: &[f64]) -> (f64, Averaged) {
 #[derive(Clone, Debug, Default)]
 pub struct ReceiverStats {
     pub values: Vec<f64>,
+    /// NaN where the cell's error is unknown (nothing scored there).
     pub sigma: Vec<f64>,
     pub hits: Vec<u64>,
     pub mean: f64,
+    /// Eq. 9 over all cells: NaN while some cell's error is unknown.
     pub rel_error: Averaged,
-    /// RMS σ over the cells (eq. 9's numerator), in the receiver's unit.
+    /// Eq. 9 over the cells whose error is known.
+    pub rel_error_known: Averaged,
+    /// Cells whose error is unknown.
+    pub unknown_cells: usize,
+    /// RMS σ over the cells (eq. 9's numerator), in the receiver's unit; NaN while some
+    /// cell's error is unknown.
     pub rms_sigma: f64,
 }
 
-/// Per-cell statistics of the cells `cells` of a run with `photons` histories: the
-/// photons' estimate (eqs. 6–7) plus the deterministic direct light, errors combined.
-pub fn receiver_stats(cells: &[CellSums], photons: u64) -> ReceiverStats {
+/// Per-cell statistics of the cells `cells` ([`cell_value`]).
+pub fn receiver_stats(cells: &[CellSums], counts: Counts) -> ReceiverStats {
     let mut s = ReceiverStats::default();
     for c in cells {
-        let (value, sigma) = cell_estimate(c.sum(), c.sum_sq(), photons);
-        // The deterministic direct part's residual is independent of the photons' noise.
-        s.values.push(value + c.direct);
-        s.sigma.push(sigma.hypot(c.direct_sigma));
+        let (value, sigma) = cell_value(c, counts);
+        s.values.push(value);
+        s.sigma.push(sigma);
         s.hits.push(c.hits);
     }
     (s.mean, s.rel_error) = mean_error(&s.values, &s.sigma);
+    let (known_values, known_sigma): (Vec<f64>, Vec<f64>) = s
+        .values
+        .iter()
+        .zip(&s.sigma)
+        .filter(|(_, sigma)| !sigma.is_nan())
+        .unzip();
+    s.unknown_cells = cells.len() - known_values.len();
+    s.rel_error_known = mean_error(&known_values, &known_sigma).1;
     s.rms_sigma = if cells.is_empty() {
         0.0
     } else {

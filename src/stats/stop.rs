@@ -1,9 +1,9 @@
 //! Stop criteria (method.md §5, contract `--target`): they read statistics only, once
 //! per epoch; the first one met ends the run.
 
-use super::{receiver_stats, relative_error, REL_ERROR_UNKNOWN};
+use super::{receiver_stats, relative_error};
 use crate::scene::Receiver;
-use crate::tally::CellSums;
+use crate::tally::{CellSums, Counts};
 use crate::{Error, Result};
 
 /// What the error target (and `--min-hits`) applies to.
@@ -115,17 +115,21 @@ impl Target {
 
 /// The target's current error for a receiver target: relative (eq. 9 quadratic for a
 /// whole receiver, the worst cell's σ_rel for a block) or absolute (RMS σ, or the worst
-/// cell's σ, in the receiver's unit).
+/// cell's σ, in the receiver's unit). Infinite while the error of a cell it covers is
+/// unknown (nothing scored there): such a target is never converged.
 pub fn receiver_target_error(
     target: &Target,
     receivers: &[Receiver],
     cells: &[CellSums],
-    photons: u64,
+    counts: Counts,
     absolute: bool,
 ) -> f64 {
     let cell_ids = target.cells(receivers);
     let picked: Vec<CellSums> = cell_ids.iter().map(|&c| cells[c]).collect();
-    let stats = receiver_stats(&picked, photons);
+    let stats = receiver_stats(&picked, counts);
+    if picked.is_empty() || stats.unknown_cells > 0 {
+        return f64::INFINITY;
+    }
     match (target, absolute) {
         (Target::Block { .. }, false) => stats
             .values
@@ -134,13 +138,7 @@ pub fn receiver_target_error(
             .map(|(v, s)| relative_error(*v, *s))
             .fold(0.0, f64::max),
         (Target::Block { .. }, true) => stats.sigma.iter().copied().fold(0.0, f64::max),
-        (_, false) => {
-            if picked.is_empty() {
-                REL_ERROR_UNKNOWN
-            } else {
-                stats.rel_error.quadratic
-            }
-        }
+        (_, false) => stats.rel_error.quadratic,
         (_, true) => stats.rms_sigma,
     }
 }

@@ -108,16 +108,17 @@ impl CompensatedSum {
     }
 }
 
-/// Per-cell moments of the history scores, and the cell's deterministic direct light.
+/// Per-cell moments of the history scores, and of the cell's sampled direct light.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CellSums {
-    /// Σx, Σx², Σx³, Σx⁴.
+    /// Σx, Σx², Σx³, Σx⁴ of the photon histories' scores.
     pub moments: [CompensatedSum; 4],
+    /// Contributions scored: photon crossings and connections, and direct-light
+    /// replicates that saw light.
     pub hits: u64,
-    /// Direct light computed deterministically (next-event receivers; 0 otherwise), in
-    /// the receiver's unit, and the residual error of its quadrature.
-    pub direct: f64,
-    pub direct_sigma: f64,
+    /// Σy, Σy², Σy³, Σy⁴ of the direct-light replicates (next-event receivers; see
+    /// `trace::direct`), in the receiver's unit; `Tallies::direct_replicates` of them.
+    pub direct: [CompensatedSum; 4],
 }
 
 impl CellSums {
@@ -129,12 +130,28 @@ impl CellSums {
         self.hits += partial.hits;
     }
 
+    /// Adds one direct-light replicate `y` (call in replicate order); a replicate that
+    /// saw light counts as a hit.
+    #[inline]
+    pub fn add_direct(&mut self, y: f64) {
+        let y2 = y * y;
+        for (m, v) in self.direct.iter_mut().zip([y, y2, y2 * y, y2 * y2]) {
+            m.add(v);
+        }
+        self.hits += (y != 0.0) as u64;
+    }
+
     pub fn sum(&self) -> f64 {
         self.moments[0].value()
     }
 
     pub fn sum_sq(&self) -> f64 {
         self.moments[1].value()
+    }
+
+    /// Σy and Σy² of the direct-light replicates.
+    pub fn direct_sums(&self) -> (f64, f64) {
+        (self.direct[0].value(), self.direct[1].value())
     }
 }
 
@@ -152,6 +169,21 @@ pub struct Tallies {
     pub triangle_hits: Vec<u64>,
     /// One entry per cell of every receiver, receivers in scene order.
     pub cells: Vec<CellSums>,
+    /// Direct-light replicates added to every next-event receiver's cells so far, and
+    /// the shadow rays they took.
+    pub direct_replicates: u64,
+    pub direct_rays: u64,
+    /// The scene emits no light: every value is exactly 0, with no error.
+    pub dark: bool,
+}
+
+/// What a cell's sums were accumulated over.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Counts {
+    pub photons: u64,
+    pub direct_replicates: u64,
+    /// No light at all: nothing scored means exactly 0.
+    pub dark: bool,
 }
 
 impl Tallies {
@@ -176,6 +208,15 @@ impl Tallies {
         }
         for p in &chunk.scores {
             self.cells[p.cell as usize].add(p);
+        }
+    }
+
+    /// What the cells' sums were accumulated over.
+    pub fn counts(&self) -> Counts {
+        Counts {
+            photons: self.photons,
+            direct_replicates: self.direct_replicates,
+            dark: self.dark,
         }
     }
 

@@ -1,154 +1,367 @@
-//! Deterministic direct light on next-event receivers (method.md eqs. 1–2): each cell's
-//! direct illuminance (or luminance) is computed, not sampled, by a fixed stratified
-//! pattern of points over the cell (and over the source, for area lights), with shadow
-//! rays through the backend's occlusion path.
+//! Direct light on next-event receivers (method.md eqs. 1–2), estimated without bias and
+//! with its own error: each *replicate* of a cell is a randomised stratified estimate of
+//! the cell's mean direct illuminance (or luminance) — an m × m jittered pattern over the
+//! cell, each point paired with one light (chosen per cell in proportion to its expected
+//! share, stratified) and, for area sources, with a point of an m × m jittered pattern
+//! over the source (strata paired by a random permutation), with shadow rays through the
+//! backend's occlusion path. Replicates are independent, so their Σy, Σy² give the direct
+//! part's mean and σ by eqs. 6–7, like photon histories; σ sees every error of the
+//! pattern (shadow edges, cone edges, grazing angles) and shrinks as replicates are
+//! added during the run ([`DirectSchedule`]).
 //!
-//! Each cell starts with a 2 × 2 pattern and doubles it in each direction; the residual
-//! error reported for an m × m pattern is the change from the (m/2) × (m/2) one, which
-//! bounds the midpoint rule's error for smooth light (it is then three times the error)
-//! and estimates it across shadow edges. A cell is refined until its residual is below
-//! [`RESIDUAL_TOLERANCE`] of its value or the pattern reaches [`MAX_PATTERN`]. The
-//! residual shrinks by refinement, never by photons.
+//! Replicate r of cell c draws from `rng::direct_stream(seed, c, r)` and cells add their
+//! replicates in order, so the sums depend only on the seed and the replicate count, not
+//! on threads or epochs.
 
-use super::emit::{Emitter, Emitters};
+use super::emit::Emitters;
+use super::sampling::uniform;
 use crate::accel::{RayBatch, RayCaster};
-use crate::tally::ReceiverGrid;
+use crate::rng::direct_stream;
+use crate::tally::{CellSums, ReceiverGrid};
+use glam::DVec3;
+use rand::RngCore;
+use rand_pcg::Pcg32;
 use rayon::prelude::*;
 
-/// Coarsest pattern: 2 × 2 points per cell (and per area source); the first value
-/// reported comes from 4 × 4.
-pub const FIRST_PATTERN: u32 = 2;
-/// Finest pattern: 32 × 32 points per cell (and patches per area source, the pattern
-/// then being capped at [`MAX_AREA_PATTERN`] since the cost grows as its fourth power).
-pub const MAX_PATTERN: u32 = 32;
-pub const MAX_AREA_PATTERN: u32 = 16;
-/// Relative residual a cell is refined to: far below the statistical errors users ask
-/// for (0.5–5 %), so the direct part never dominates a cell's error.
-pub const RESIDUAL_TOLERANCE: f64 = 1e-3;
+/// Replicates computed before the photons: enough for a σ of the direct part that can
+/// be trusted from the start (its z-scores follow Student's t with 15 degrees of
+/// freedom, RMS 1.08).
+pub const PILOT_REPLICATES: u64 = 16;
 
-/// Direct light of one cell.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct CellDirect {
-    pub value: f64,
-    pub sigma: f64,
-    /// Shadow rays cast for it.
-    pub rays: u64,
+/// Sample points per side of a cell in one replicate: 4 × 4, fewer on receivers with
+/// very many cells so that a replicate stays affordable.
+pub fn points_per_side(cells: usize) -> u32 {
+    match cells {
+        0..=65_536 => 4,
+        65_537..=1_048_576 => 2,
+        _ => 1,
+    }
 }
 
-/// A ray-casting context: the caster and the distance within which a point counts as
-/// on a surface (so a receiver lying on a floor is not shadowed by the floor).
-struct Shadows<'a> {
-    caster: &'a dyn RayCaster,
-    slack: f64,
+/// The light of one replicate's sample: weight of the light chosen, and for area sources
+/// the point of the source it is paired with.
+struct LightChoice {
+    /// Per light: probability of being chosen for a sample of this cell.
+    pmf: Vec<f64>,
+    cdf: Vec<f64>,
 }
 
-/// Direct light of every cell of `grid`, in cell order. `slack` (m) is how far from a
-/// surface a receiver still counts as lying on it.
-pub fn direct_light(
-    grid: &ReceiverGrid,
-    emitters: &Emitters,
-    caster: &dyn RayCaster,
-    slack: f64,
-) -> Vec<CellDirect> {
-    let shadows = Shadows { caster, slack };
-    let has_area = emitters
-        .emitters
-        .iter()
-        .any(|e| matches!(e, Emitter::Area { .. }));
-    (0..grid.cell_count() as u32)
-        .into_par_iter()
-        .map_init(
-            || (RayBatch::default(), Vec::new(), Vec::new()),
-            |(rays, weights, occluded), cell| {
-                let (i, j) = (cell % grid.cells[0], cell / grid.cells[0]);
-                let max_pattern = if has_area {
-                    MAX_AREA_PATTERN
-                } else {
-                    MAX_PATTERN
-                };
-                let mut m = FIRST_PATTERN;
-                let mut previous =
-                    cell_pattern(grid, emitters, &shadows, i, j, m, rays, weights, occluded);
-                let mut rays_cast = rays.len() as u64;
-                loop {
-                    m *= 2;
-                    let value =
-                        cell_pattern(grid, emitters, &shadows, i, j, m, rays, weights, occluded);
-                    rays_cast += rays.len() as u64;
-                    let sigma = (value - previous).abs();
-                    if sigma <= RESIDUAL_TOLERANCE * value || m >= max_pattern {
-                        return CellDirect {
-                            value,
-                            sigma,
-                            rays: rays_cast,
-                        };
-                    }
-                    previous = value;
+impl LightChoice {
+    /// Chooses lights for cell `cell` in proportion to their unoccluded light at its
+    /// centre, mixed with 10 % uniform so a light the centre does not see (a cone or a
+    /// source plane crossing the cell) is still sampled: any positive pmf is unbiased.
+    fn for_cell(emitters: &Emitters, grid: &ReceiverGrid, centre: DVec3) -> LightChoice {
+        let n = emitters.emitters.len();
+        let mut share = vec![0.0; n];
+        for (light, s) in share.iter_mut().enumerate() {
+            emitters.incoming(light, centre, &[(0.5, 0.5)], |inc| {
+                if let Some(f) = grid.arrival_factor(-inc.direction()) {
+                    *s += inc.normal_lx * f;
                 }
-            },
-        )
-        .collect()
-}
-
-/// The direct light of cell (i, j) by an m × m pattern (midpoints of the sub-cells).
-#[allow(clippy::too_many_arguments)]
-fn cell_pattern(
-    grid: &ReceiverGrid,
-    emitters: &Emitters,
-    shadows: &Shadows<'_>,
-    i: u32,
-    j: u32,
-    m: u32,
-    rays: &mut RayBatch,
-    weights: &mut Vec<f64>,
-    occluded: &mut Vec<bool>,
-) -> f64 {
-    rays.clear();
-    weights.clear();
-    let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
-    // The same m × m midpoint pattern over the cell and over area sources.
-    let pattern: Vec<(f64, f64)> = (0..m * m)
-        .map(|k| {
-            (
-                ((k / m) as f64 + 0.5) / m as f64,
-                ((k % m) as f64 + 0.5) / m as f64,
-            )
-        })
-        .collect();
-    for &(sa, sb) in &pattern {
-        let p = grid.point_at((i as f64 + sa) / nu, (j as f64 + sb) / nv);
-        for light in 0..emitters.emitters.len() {
-            emitters.incoming(light, p, &pattern, |inc| {
-                if inc.distance <= 4.0 * shadows.slack {
-                    return;
-                }
-                let Some(factor) = grid.arrival_factor(-inc.direction()) else {
-                    return;
-                };
-                // Stop just short of a source piece, and start a directional source's
-                // ray just off the receiver, which may lie on a surface.
-                let (t_near, t_far) = if inc.distance.is_finite() {
-                    let eps = (2.0 * shadows.slack / inc.distance) as f32;
-                    (eps, 1.0 - eps)
-                } else {
-                    ((2.0 * shadows.slack) as f32, f32::INFINITY)
-                };
-                rays.push(
-                    p.as_vec3().into(),
-                    inc.to_source.as_vec3().into(),
-                    t_near,
-                    t_far,
-                );
-                weights.push(inc.normal_lx * factor);
             });
         }
+        let total: f64 = share.iter().sum();
+        let pmf: Vec<f64> = share
+            .iter()
+            .map(|s| {
+                if total > 0.0 {
+                    0.9 * s / total + 0.1 / n as f64
+                } else {
+                    1.0 / n as f64
+                }
+            })
+            .collect();
+        let mut acc = 0.0;
+        let cdf = pmf
+            .iter()
+            .map(|p| {
+                acc += p;
+                acc
+            })
+            .collect();
+        LightChoice { pmf, cdf }
     }
-    shadows.caster.occluded(rays, occluded);
-    let lit: f64 = weights
-        .iter()
-        .zip(occluded.iter())
-        .filter(|(_, blocked)| !**blocked)
-        .map(|(w, _)| w)
-        .sum();
-    lit / (m * m) as f64
+
+    #[inline]
+    fn pick(&self, u: f64) -> usize {
+        self.cdf
+            .iter()
+            .position(|&c| u < c)
+            .unwrap_or(self.cdf.len() - 1)
+    }
+}
+
+/// Reused buffers of one worker.
+#[derive(Default)]
+struct Scratch {
+    rays: RayBatch,
+    /// Per shadow ray: (replicate within the call, weight if unoccluded).
+    weights: Vec<(u32, f64)>,
+    occluded: Vec<bool>,
+    permutation: Vec<u32>,
+    light_permutation: Vec<u32>,
+    /// Per replicate of a block: the sum of its unoccluded weights.
+    totals: Vec<f64>,
+}
+
+/// Replicates of one cell whose shadow rays are cast together.
+const REPLICATES_PER_BATCH: u64 = 64;
+
+/// Everything a replicate reads.
+pub struct DirectLight<'a> {
+    pub emitters: &'a Emitters,
+    pub caster: &'a dyn RayCaster,
+    /// How far from a surface (m) a receiver still counts as lying on it.
+    pub slack: f64,
+    pub seed: u64,
+}
+
+impl DirectLight<'_> {
+    /// Adds replicates `first .. first + count` to every cell of `grid` (`cells` are the
+    /// grid's own sums), in parallel over cells; returns the shadow rays cast.
+    pub fn add_replicates(
+        &self,
+        grid: &ReceiverGrid,
+        cells: &mut [CellSums],
+        first: u64,
+        count: u64,
+    ) -> u64 {
+        if self.emitters.emitters.is_empty() || count == 0 {
+            return 0;
+        }
+        cells
+            .par_iter_mut()
+            .enumerate()
+            .map_init(Scratch::default, |s, (k, sums)| {
+                let cell = grid.first_cell as u64 + k as u64;
+                self.cell_replicates(grid, k as u32, cell, first, count, s, sums)
+            })
+            .sum()
+    }
+
+    /// Replicates of local cell `k` (global index `cell`) into `sums`, in order, their
+    /// shadow rays cast in blocks of [`REPLICATES_PER_BATCH`].
+    #[allow(clippy::too_many_arguments)]
+    fn cell_replicates(
+        &self,
+        grid: &ReceiverGrid,
+        k: u32,
+        cell: u64,
+        first: u64,
+        count: u64,
+        s: &mut Scratch,
+        sums: &mut CellSums,
+    ) -> u64 {
+        let (i, j) = (k % grid.cells[0], k / grid.cells[0]);
+        let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
+        let cell_point = |a: f64, b: f64| grid.point_at((i as f64 + a) / nu, (j as f64 + b) / nv);
+        let choice = LightChoice::for_cell(self.emitters, grid, cell_point(0.5, 0.5));
+        let m = points_per_side(grid.cell_count());
+        let samples = m * m;
+        let mut rays = 0;
+        let mut block_start = first;
+        while block_start < first + count {
+            let block = REPLICATES_PER_BATCH.min(first + count - block_start);
+            s.rays.clear();
+            s.weights.clear();
+            for r in 0..block {
+                let mut rng = direct_stream(self.seed, cell, block_start + r);
+                shuffle(&mut s.permutation, samples, &mut rng);
+                shuffle(&mut s.light_permutation, samples, &mut rng);
+                for sample in 0..samples {
+                    // Jittered point of the cell's stratum `sample`.
+                    let p = cell_point(
+                        ((sample % m) as f64 + uniform(&mut rng)) / m as f64,
+                        ((sample / m) as f64 + uniform(&mut rng)) / m as f64,
+                    );
+                    // The light, from stratum π(sample) of its cumulative distribution.
+                    let u = (s.light_permutation[sample as usize] as f64 + uniform(&mut rng))
+                        / samples as f64;
+                    let light = choice.pick(u);
+                    // The source point (area sources), from stratum π'(sample) of the source.
+                    let stratum = s.permutation[sample as usize];
+                    let source_point = (
+                        ((stratum % m) as f64 + uniform(&mut rng)) / m as f64,
+                        ((stratum / m) as f64 + uniform(&mut rng)) / m as f64,
+                    );
+                    let weight = 1.0 / (choice.pmf[light] * samples as f64);
+                    self.queue(grid, light, p, source_point, weight, r as u32, s);
+                }
+            }
+            self.caster.occluded(&s.rays, &mut s.occluded);
+            s.totals.clear();
+            s.totals.resize(block as usize, 0.0);
+            for (&(r, w), &blocked) in s.weights.iter().zip(&s.occluded) {
+                if !blocked {
+                    s.totals[r as usize] += w;
+                }
+            }
+            for &y in &s.totals {
+                sums.add_direct(y);
+            }
+            rays += s.rays.len() as u64;
+            block_start += block;
+        }
+        rays
+    }
+
+    /// Queues the shadow ray from receiver point `p` to `light` (at `source_point` of an
+    /// area source) and what it adds to replicate `r` if unoccluded.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn queue(
+        &self,
+        grid: &ReceiverGrid,
+        light: usize,
+        p: DVec3,
+        source_point: (f64, f64),
+        weight: f64,
+        r: u32,
+        s: &mut Scratch,
+    ) {
+        let slack = self.slack;
+        self.emitters.incoming(light, p, &[source_point], |inc| {
+            if inc.distance <= 4.0 * slack {
+                return;
+            }
+            let Some(factor) = grid.arrival_factor(-inc.direction()) else {
+                return;
+            };
+            // Stop just short of the source, and start a directional source's ray
+            // just off the receiver, which may lie on a surface.
+            let (t_near, t_far) = if inc.distance.is_finite() {
+                let eps = (2.0 * slack / inc.distance) as f32;
+                (eps, 1.0 - eps)
+            } else {
+                ((2.0 * slack) as f32, f32::INFINITY)
+            };
+            s.rays.push(
+                p.as_vec3().into(),
+                inc.to_source.as_vec3().into(),
+                t_near,
+                t_far,
+            );
+            s.weights.push((r, inc.normal_lx * factor * weight));
+        });
+    }
+}
+
+/// A uniformly random permutation of 0..n into `out` (Fisher–Yates).
+fn shuffle(out: &mut Vec<u32>, n: u32, rng: &mut Pcg32) {
+    out.clear();
+    out.extend(0..n);
+    for k in (1..n as usize).rev() {
+        let j = (rng.next_u64() % (k as u64 + 1)) as usize;
+        out.swap(k, j);
+    }
+}
+
+/// How many direct-light replicates a run has after N photons: a number of replicates
+/// per photon, ρ, chosen to minimise the time to a given error of the next-event
+/// receivers (σ² = a/R + b/N at costs c_d·R + c_p·N rays is lowest at
+/// R/N = sqrt(a·c_p / (b·c_d))), re-estimated only at photon counts every run passes
+/// through (`CHUNK_PHOTONS`·2^k: epochs are cut there), so the replicate count, like
+/// every tally, depends on the photon count alone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DirectSchedule {
+    /// Replicates per photon.
+    pub per_photon: f64,
+}
+
+/// At most this many direct shadow rays per photon ray: the direct light never takes
+/// more than 16/17 of a run, even when photons add nothing to a receiver (a black room),
+/// and the photons still build the scene map.
+const MAX_DIRECT_RAY_SHARE: f64 = 16.0;
+
+impl DirectSchedule {
+    /// Replicates wanted after `photons` photons (never fewer than `done`).
+    pub fn wanted(&self, photons: u64, done: u64) -> u64 {
+        let r = (self.per_photon * photons as f64).ceil();
+        (if r.is_finite() { r as u64 } else { done }).max(done)
+    }
+
+    /// The ratio re-estimated from the tallies: `a`, `b` are the receivers' direct
+    /// variance per replicate and photon variance per history, each relative to the
+    /// cells' values and summed over cells; `direct_rays_per_replicate`,
+    /// `rays_per_photon` the costs.
+    pub fn from_variances(
+        a: f64,
+        b: f64,
+        direct_rays_per_replicate: f64,
+        rays_per_photon: f64,
+    ) -> DirectSchedule {
+        let cap = MAX_DIRECT_RAY_SHARE * rays_per_photon / direct_rays_per_replicate.max(1.0);
+        let optimum = if b > 0.0 {
+            (a * rays_per_photon / (b * direct_rays_per_replicate.max(1.0))).sqrt()
+        } else {
+            cap
+        };
+        DirectSchedule {
+            per_photon: if optimum.is_finite() {
+                optimum.min(cap)
+            } else {
+                cap
+            },
+        }
+    }
+}
+
+/// Σ over cells of the relative variances of one direct replicate (a) and of one photon
+/// history (b), for [`DirectSchedule::from_variances`]. Cells without a value are left
+/// out.
+pub fn relative_variances(cells: &[CellSums], photons: u64, replicates: u64) -> (f64, f64) {
+    let (mut a, mut b) = (0.0, 0.0);
+    for c in cells {
+        let (ys, yss) = c.direct_sums();
+        let direct = if replicates > 0 {
+            ys / replicates as f64
+        } else {
+            0.0
+        };
+        let photon = if photons > 0 {
+            c.sum() / photons as f64
+        } else {
+            0.0
+        };
+        let value = direct + photon;
+        if !(value > 0.0) {
+            continue;
+        }
+        if replicates > 1 {
+            let r = replicates as f64;
+            a += ((yss / r - direct * direct) * r / (r - 1.0)).max(0.0) / (value * value);
+        }
+        if photons > 1 {
+            let n = photons as f64;
+            b += ((c.sum_sq() / n - photon * photon) * n / (n - 1.0)).max(0.0) / (value * value);
+        }
+    }
+    (a, b)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shuffle_is_a_permutation() {
+        let mut rng = crate::rng::aux_stream(9);
+        let mut p = Vec::new();
+        shuffle(&mut p, 16, &mut rng);
+        let mut sorted = p.clone();
+        sorted.sort();
+        assert_eq!(sorted, (0..16).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn schedule_balances_variance_per_cost_and_caps_the_share() {
+        // Equal variances, direct replicate 4× a photon's rays: R/N = sqrt(1/4) = 1/2.
+        let s = DirectSchedule::from_variances(1.0, 1.0, 40.0, 10.0);
+        assert!((s.per_photon - 0.5).abs() < 1e-12);
+        // Photons add nothing: the cap, 16 direct rays per photon ray.
+        let s = DirectSchedule::from_variances(1.0, 0.0, 40.0, 10.0);
+        assert!((s.per_photon - 4.0).abs() < 1e-12);
+        assert_eq!(s.wanted(1000, 3), 4000);
+        assert_eq!(s.wanted(1, 16), 16, "never fewer than done");
+    }
 }

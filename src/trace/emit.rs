@@ -1,7 +1,9 @@
 //! Light sources in the local frame: their flux, and the sampling of a photon's origin
 //! and direction from each source's spatial and angular emission density.
 
-use super::sampling::{cosine_hemisphere, uniform, uniform_cone, uniform_disk, uniform_sphere};
+use super::sampling::{
+    cosine_hemisphere, uniform, uniform_cone, uniform_disk, uniform_sphere, SphericalRect,
+};
 use crate::scene::{LightKind, Scene};
 use glam::DVec3;
 use rand_pcg::Pcg32;
@@ -215,6 +217,11 @@ impl Emitters {
     }
 }
 
+/// Below this solid angle (sr) an area source is sampled by area, not by solid angle:
+/// its light then varies little over it, and the spherical parametrisation loses
+/// digits.
+const MIN_SPHERICAL_SR: f64 = 1e-4;
+
 /// Light from one source arriving at a point, as one point-like piece of it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Incoming {
@@ -224,7 +231,8 @@ pub struct Incoming {
     /// Distance to the piece; `f64::INFINITY` for a directional source.
     pub distance: f64,
     /// Illuminance the piece gives on a plane facing it (lx): I/d² for point and spot
-    /// sources, E⊥ for directional ones, L·cos θ_s·ΔA/d² for a patch of an area source.
+    /// sources, E⊥ for directional ones, L·Ω/n for one of n solid-angle shares of an
+    /// area source (L·cos θ_s·ΔA/d² for a patch of one, when it is sampled by area).
     pub normal_lx: f64,
 }
 
@@ -243,8 +251,9 @@ impl Incoming {
 impl Emitters {
     /// The light of source `light` arriving at local point `p` (method.md eqs. 1–2),
     /// piece by piece: one piece for point, spot and directional sources; for an area
-    /// source one per point of `area_pattern` (coordinates along u and v in [0, 1)²),
-    /// each standing for an equal share of its area. Visibility is the caller's.
+    /// source one per point of `area_pattern` ([0, 1)² coordinates), each standing for
+    /// an equal share of the source's solid angle seen from `p` (of its area, for far
+    /// sources and parallelograms that are not rectangles). Visibility is the caller's.
     pub fn incoming(
         &self,
         light: usize,
@@ -292,12 +301,38 @@ impl Emitters {
                 v,
                 normal,
             } => {
-                let patch_area = u.cross(v).length() / area_pattern.len().max(1) as f64;
-                for &(a, b) in area_pattern {
-                    let q = corner + u * a + v * b;
-                    let cos_s = (p - q).normalize_or_zero().dot(normal);
-                    if cos_s > 0.0 {
-                        from_point(q, scale * cos_s * patch_area);
+                if !((p - corner).dot(normal) > 0.0) {
+                    return;
+                }
+                let pieces = area_pattern.len().max(1) as f64;
+                match SphericalRect::new(p, corner, u, v) {
+                    // Equal shares of the solid angle: each piece gives L·Ω/n, bounded
+                    // however near or grazing the point.
+                    Some(rect) if rect.solid_angle_sr > MIN_SPHERICAL_SR => {
+                        let normal_lx = scale * rect.solid_angle_sr / pieces;
+                        for &(a, b) in area_pattern {
+                            let to_source = rect.sample(a, b) - p;
+                            let distance = to_source.length();
+                            if distance > 0.0 {
+                                each(Incoming {
+                                    to_source,
+                                    distance,
+                                    normal_lx,
+                                });
+                            }
+                        }
+                    }
+                    // Far (or a parallelogram): equal shares of the area,
+                    // L·cos θ_s·ΔA/d² each.
+                    _ => {
+                        let patch_area = u.cross(v).length() / pieces;
+                        for &(a, b) in area_pattern {
+                            let q = corner + u * a + v * b;
+                            let cos_s = (p - q).normalize_or_zero().dot(normal);
+                            if cos_s > 0.0 {
+                                from_point(q, scale * cos_s * patch_area);
+                            }
+                        }
                     }
                 }
             }

@@ -117,22 +117,15 @@ impl<'a> Tracer<'a> {
         estimator: Option<Estimator>,
     ) -> Tracer<'a> {
         let g = &scene.geometry;
-        // Diffuse paths exist when some triangle has a diffuse lobe: then `auto`
-        // receivers are scored by next-event estimation.
-        let diffuse_paths = g.material.iter().any(|&m| {
-            scene.materials[m as usize].reflectance + scene.materials[m as usize].transmittance
-                > 0.0
-        });
         let mut first_cell = 0u32;
         let receivers = scene
             .receivers
             .iter()
             .map(|r| {
-                let next_event = match estimator.unwrap_or(r.estimator) {
-                    Estimator::Track => false,
-                    Estimator::NextEvent => true,
-                    Estimator::Auto => diffuse_paths,
-                };
+                // `auto` is next-event estimation: sampled direct light wherever a source
+                // reaches, connections where diffuse paths exist, and crossings for what
+                // neither can score (light arriving from a specular surface).
+                let next_event = estimator.unwrap_or(r.estimator) != Estimator::Track;
                 let grid = ReceiverGrid::new(r, g.origin, first_cell, next_event);
                 first_cell += grid.cell_count() as u32;
                 grid

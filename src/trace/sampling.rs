@@ -88,6 +88,103 @@ pub fn uniform_disk(rng: &mut Pcg32, center: DVec3, n: DVec3, radius: f64) -> DV
     center + t * (r * phi.cos()) + b * (r * phi.sin())
 }
 
+/// A rectangle (orthogonal edges `ex`, `ey` from `corner`) as seen from a point:
+/// uniform sampling of its solid angle (Ureña, Fajardo and King 2013, "An
+/// area-preserving parametrization for spherical rectangles", as in pbrt-v4). Light
+/// from a Lambertian rectangle of luminance L then arrives with the constant weight
+/// L·Ω per sample, however close or grazing the point: no 1/d² in the estimate.
+#[derive(Clone, Copy, Debug)]
+pub struct SphericalRect {
+    origin: DVec3,
+    x: DVec3,
+    y: DVec3,
+    z: DVec3,
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+    z0: f64,
+    b0: f64,
+    b1: f64,
+    k: f64,
+    /// Solid angle subtended (sr).
+    pub solid_angle_sr: f64,
+}
+
+impl SphericalRect {
+    /// The rectangle as seen from `p`; `None` when it subtends no solid angle (p in its
+    /// plane) or the edges are not orthogonal.
+    pub fn new(p: DVec3, corner: DVec3, ex: DVec3, ey: DVec3) -> Option<SphericalRect> {
+        let (exl, eyl) = (ex.length(), ey.length());
+        let (x, y) = (ex / exl, ey / eyl);
+        if x.dot(y).abs() > 1e-9 {
+            return None;
+        }
+        let mut z = x.cross(y);
+        let d = corner - p;
+        let mut z0 = d.dot(z);
+        // z points away from the rectangle.
+        if z0 > 0.0 {
+            z = -z;
+            z0 = -z0;
+        }
+        let (x0, y0) = (d.dot(x), d.dot(y));
+        let (x1, y1) = (x0 + exl, y0 + eyl);
+        // The interior angles g0..g3 at the corners of the spherical rectangle, from the
+        // normals of the planes through the eye and each edge, in closed form.
+        let z2 = z0 * z0;
+        let (rx0, rx1) = ((z2 + x0 * x0).sqrt(), (z2 + x1 * x1).sqrt());
+        let (ry0, ry1) = ((z2 + y0 * y0).sqrt(), (z2 + y1 * y1).sqrt());
+        let angle = |c: f64| c.clamp(-1.0, 1.0).acos();
+        let g0 = angle(x1 * y0 / (ry0 * rx1));
+        let g1 = angle(-x1 * y1 / (rx1 * ry1));
+        let g2 = angle(x0 * y1 / (rx0 * ry1));
+        let g3 = angle(-x0 * y0 / (rx0 * ry0));
+        let solid_angle_sr = g0 + g1 + g2 + g3 - std::f64::consts::TAU;
+        if !(solid_angle_sr > 0.0 && z0 < 0.0) {
+            return None;
+        }
+        Some(SphericalRect {
+            origin: p,
+            x,
+            y,
+            z,
+            x0,
+            x1,
+            y0,
+            y1,
+            z0,
+            b0: -y0 / ry0,
+            b1: y1 / ry1,
+            k: std::f64::consts::TAU - g2 - g3,
+            solid_angle_sr,
+        })
+    }
+
+    /// The point of the rectangle at parameters (u, v) ∈ [0, 1)²: uniform (u, v) give
+    /// directions uniform over the solid angle, and strata of (u, v) strata of it.
+    pub fn sample(&self, u: f64, v: f64) -> DVec3 {
+        let au = u * self.solid_angle_sr + self.k;
+        let fu = (au.cos() * self.b0 - self.b1) / au.sin();
+        let cu = (1.0 / (fu * fu + self.b0 * self.b0).sqrt())
+            .copysign(fu)
+            .clamp(-1.0 + 1e-15, 1.0 - 1e-15);
+        let xu = (-(cu * self.z0) / (1.0 - cu * cu).max(0.0).sqrt()).clamp(self.x0, self.x1);
+        let d2 = xu * xu + self.z0 * self.z0;
+        let d = d2.sqrt();
+        let h0 = self.y0 / (d2 + self.y0 * self.y0).sqrt();
+        let h1 = self.y1 / (d2 + self.y1 * self.y1).sqrt();
+        let hv = h0 + v * (h1 - h0);
+        let hv2 = hv * hv;
+        let yv = if hv2 < 1.0 - 1e-12 {
+            (hv * d / (1.0 - hv2).sqrt()).clamp(self.y0, self.y1)
+        } else {
+            self.y1
+        };
+        self.origin + self.x * xu + self.y * yv + self.z * self.z0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -141,5 +238,40 @@ mod tests {
         // Var(cos) = 1/2 − 4/9 = 1/18 for the cosine-weighted distribution.
         let sigma = (1.0 / 18.0 / k as f64).sqrt();
         assert!((mean - 2.0 / 3.0).abs() < 4.0 * sigma, "mean cos {mean}");
+    }
+
+    #[test]
+    fn spherical_rect_samples_are_uniform_in_solid_angle() {
+        // A 2 × 1 rectangle 0.05 above a point near its edge: E = L∫cos θ dω, estimated
+        // with Ω·mean(cos θ), must match the exact irradiance of the rectangle (the
+        // polygon formula) to the sampling error of jittered strata.
+        let (corner, ex, ey) = (DVec3::new(-0.1, -0.5, 0.05), DVec3::X * 2.0, DVec3::Y);
+        let p = DVec3::ZERO;
+        let rect = SphericalRect::new(p, corner, ex, ey).unwrap();
+        let m = 64;
+        let mut rng = crate::rng::aux_stream(11);
+        let mut sum = 0.0;
+        for k in 0..m * m {
+            let u = ((k % m) as f64 + uniform(&mut rng)) / m as f64;
+            let v = ((k / m) as f64 + uniform(&mut rng)) / m as f64;
+            let q = rect.sample(u, v);
+            assert!((q.z - 0.05).abs() < 1e-12 && q.x >= -0.1 - 1e-12 && q.x <= 1.9 + 1e-12);
+            sum += (q - p).normalize().z;
+        }
+        let estimate = rect.solid_angle_sr * sum / (m * m) as f64;
+        let corners = [corner, corner + ex, corner + ex + ey, corner + ey];
+        let exact: f64 = (0..4)
+            .map(|i| {
+                let (a, b) = (corners[i] - p, corners[(i + 1) % 4] - p);
+                let c = a.cross(b);
+                a.normalize().dot(b.normalize()).acos() * c.z / c.length()
+            })
+            .sum::<f64>()
+            .abs()
+            / 2.0;
+        assert!(
+            (estimate - exact).abs() < 1e-4 * exact,
+            "{estimate} vs {exact}"
+        );
     }
 }
