@@ -1,17 +1,26 @@
-//! Finds Embree (pkg-config `embree4`/`embree3`, else the standard include directories),
-//! generates its bindings with bindgen and compiles the C reference benchmark.
+//! Finds Embree 3 (pkg-config `embree3`, else the standard include directories),
+//! generates its bindings with bindgen (with bindgen's layout checks of every FFI struct)
+//! and compiles the C reference benchmark.
 //!
-//! Failures end the build with one line naming the Debian package to install.
+//! Failures end the build with one line naming the Debian package to install. Embree 4
+//! alone is one of them: it has no ray streams and another query API.
 
 use std::path::{Path, PathBuf};
 use std::process::{exit, Command};
 
-/// What we found: major version, include directories, library search directories.
+/// Where Embree's headers and library are: include and library search directories.
 struct Embree {
-    major: u32,
     include_dirs: Vec<PathBuf>,
     lib_dirs: Vec<PathBuf>,
 }
+
+/// Include directories searched when pkg-config knows no Embree (Debian's libembree-dev
+/// ships no .pc file).
+const INCLUDE_DIRS: [&str; 3] = [
+    "/usr/include",
+    "/usr/local/include",
+    "/opt/homebrew/include",
+];
 
 fn fail(message: &str) -> ! {
     eprintln!("luxtally: {message}");
@@ -21,7 +30,7 @@ fn fail(message: &str) -> ! {
 }
 
 /// `pkg-config` for one package, if the command and a .pc file exist.
-fn from_pkg_config(package: &str, major: u32) -> Option<Embree> {
+fn from_pkg_config(package: &str) -> Option<Embree> {
     let out = Command::new("pkg-config")
         .args(["--cflags-only-I", "--libs-only-L", package])
         .output()
@@ -31,7 +40,6 @@ fn from_pkg_config(package: &str, major: u32) -> Option<Embree> {
     }
     let text = String::from_utf8_lossy(&out.stdout);
     let mut e = Embree {
-        major,
         include_dirs: Vec::new(),
         lib_dirs: Vec::new(),
     };
@@ -45,38 +53,34 @@ fn from_pkg_config(package: &str, major: u32) -> Option<Embree> {
     Some(e)
 }
 
-/// Reads `RTC_VERSION_MAJOR` from `<dir>/embreeN/rtcore_config.h`.
-fn version_in(include_dir: &Path, sub: &str) -> Option<u32> {
-    let text = std::fs::read_to_string(include_dir.join(sub).join("rtcore_config.h")).ok()?;
-    let value = |name: &str| -> Option<u32> {
-        text.lines().find_map(|line| {
-            let mut words = line.split_whitespace();
-            (words.next()? == "#define" && words.next()? == name)
-                .then(|| words.next()?.parse().ok())
-                .flatten()
-        })
-    };
-    value("RTC_VERSION_MAJOR").or_else(|| value("RTC_VERSION").map(|v| v / 10000))
+/// The first include directory holding `<sub>/rtcore.h`.
+fn headers_in(sub: &str) -> Option<PathBuf> {
+    INCLUDE_DIRS
+        .iter()
+        .map(Path::new)
+        .find(|dir| dir.join(sub).join("rtcore.h").is_file())
+        .map(Path::to_path_buf)
 }
 
+/// Embree 3; else, when only Embree 4 is there, the build stops saying so.
 fn find_embree() -> Option<Embree> {
-    if let Some(e) = from_pkg_config("embree4", 4).or_else(|| from_pkg_config("embree3", 3)) {
+    if let Some(e) = from_pkg_config("embree3") {
         return Some(e);
     }
-    for dir in [
-        "/usr/include",
-        "/usr/local/include",
-        "/opt/homebrew/include",
-    ] {
-        for sub in ["embree4", "embree3"] {
-            if let Some(major) = version_in(Path::new(dir), sub) {
-                return Some(Embree {
-                    major,
-                    include_dirs: vec![dir.into()],
-                    lib_dirs: Vec::new(),
-                });
-            }
-        }
+    if let Some(dir) = headers_in("embree3") {
+        return Some(Embree {
+            include_dirs: vec![dir],
+            lib_dirs: Vec::new(),
+        });
+    }
+    let embree4 = from_pkg_config("embree4")
+        .map(|_| "pkg-config embree4".to_string())
+        .or_else(|| headers_in("embree4").map(|d| d.join("embree4").display().to_string()));
+    if let Some(found) = embree4 {
+        fail(&format!(
+            "found only Embree 4 ({found}); luxtally supports Embree 3.x only \
+             (Debian 12's libembree-dev, 3.13): install it with `apt-get install -y libembree-dev`"
+        ));
     }
     None
 }
@@ -85,18 +89,14 @@ fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=ffi/embree.h");
     println!("cargo:rerun-if-changed=benches/c/embree_reference.c");
-    println!("cargo::rustc-check-cfg=cfg(embree4)");
 
     let Some(embree) = find_embree() else {
-        fail("Embree not found: install it with `apt-get install -y libembree-dev`");
+        fail("Embree 3 not found: install it with `apt-get install -y libembree-dev`");
     };
-    if embree.major == 4 {
-        println!("cargo:rustc-cfg=embree4");
-    }
     for dir in &embree.lib_dirs {
         println!("cargo:rustc-link-search=native={}", dir.display());
     }
-    println!("cargo:rustc-link-lib=dylib=embree{}", embree.major);
+    println!("cargo:rustc-link-lib=dylib=embree3");
 
     // Bindings. bindgen panics when it cannot load libclang: turn that into our message.
     let mut builder = bindgen::Builder::default()
@@ -107,10 +107,10 @@ fn main() {
         .derive_default(true)
         // Constants as `RTC_BUILD_QUALITY_HIGH`, not `RTCBuildQuality_RTC_BUILD_QUALITY_HIGH`.
         .prepend_enum_name(false)
-        .layout_tests(false);
-    if embree.major == 4 {
-        builder = builder.clang_arg("-DLUXTALLY_EMBREE4");
-    }
+        // Size, alignment and field offsets of every struct checked against clang's: the
+        // cheapest guard against ABI drift. bindgen emits them as compile-time assertions
+        // (`const _: () = ...` in `accel::embree::sys`), so every build of the lib checks them.
+        .layout_tests(true);
     for dir in &embree.include_dirs {
         builder = builder.clang_arg(format!("-I{}", dir.display()));
     }
@@ -135,15 +135,12 @@ fn main() {
     }
 
     // The C reference benchmark (plain loops over Embree's API), linked into the crate.
-    // Embree 4 has no streams and a different call signature: only built against 3.
-    if embree.major == 3 {
-        let mut c = cc::Build::new();
-        c.file("benches/c/embree_reference.c")
-            .opt_level(3)
-            .warnings(true);
-        for dir in &embree.include_dirs {
-            c.include(dir);
-        }
-        c.compile("luxtally_c_reference");
+    let mut c = cc::Build::new();
+    c.file("benches/c/embree_reference.c")
+        .opt_level(3)
+        .warnings(true);
+    for dir in &embree.include_dirs {
+        c.include(dir);
     }
+    c.compile("luxtally_c_reference");
 }

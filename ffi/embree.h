@@ -1,7 +1,3 @@
-/* Wrapper header for bindgen: the Embree API luxtally binds to. build.rs defines
-   LUXTALLY_EMBREE4 when it found Embree 4. */
-#ifdef LUXTALLY_EMBREE4
-#include <embree4/rtcore.h>
-#else
+/* Wrapper header for bindgen: the Embree 3 API luxtally binds to (build.rs stops on a
+   machine with Embree 4 only). */
 #include <embree3/rtcore.h>
-#endif

@@ -1,21 +1,52 @@
 #!/usr/bin/env bash
-# Installs what luxtally needs to build and test, when it is missing: Debian's Embree 3,
-# libclang (for bindgen) and chromium (tests/report_browser.rs opens report.html in it,
-# headless). Safe to run again; does nothing when all is there.
+# Installs the Debian packages luxtally needs to build, test and run the README's commands,
+# when they are missing: build-essential and pkg-config, libclang-dev (bindgen loads
+# libclang), libembree-dev (Embree 3), chromium (tests/report_browser.rs opens report.html
+# in it, headless) and OpenMPI (openmpi-bin, libopenmpi-dev).
+#
+# What is missing is decided from dpkg's package state (`dpkg-query -W`), never from files
+# on disk: a libclang-cpp14 pulled in by another package is not libclang-dev. Only the
+# missing packages are installed, after one `apt-get update`; as root directly, else
+# through sudo; without either it stops with the apt-get command to run as root.
+# Safe to run again: does nothing when everything is installed.
 set -euo pipefail
-missing=()
-[ -e /usr/include/embree3/rtcore.h ] || [ -e /usr/include/embree4/rtcore.h ] || missing+=(libembree-dev)
-ls /usr/lib/llvm-*/lib/libclang*.so* >/dev/null 2>&1 || ls /usr/lib/x86_64-linux-gnu/libclang*.so* >/dev/null 2>&1 || missing+=(libclang-dev)
-command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)
-command -v cc >/dev/null 2>&1 || missing+=(build-essential)
-[ -x /usr/bin/chromium ] || missing+=(chromium)
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "luxtally setup: installing ${missing[*]}" >&2
-  sudo=""
-  [ "$(id -u)" -eq 0 ] || sudo="sudo"
-  $sudo apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${missing[@]}" >/dev/null
+
+packages=(build-essential pkg-config libclang-dev libembree-dev chromium openmpi-bin libopenmpi-dev)
+
+# True when dpkg reports PACKAGE as installed (status "install ok installed", or
+# "hold ok installed"); a removed package with its configuration left is not.
+installed() {
+  local status
+  status=$(dpkg-query -W -f='${Status}' "$1" 2>/dev/null) || return 1
+  [ "${status##* }" = installed ]
+}
+
+if ! command -v dpkg-query >/dev/null 2>&1; then
+  echo "luxtally setup: dpkg-query not found (not Debian?): not checking system packages;" \
+    "the build needs Embree 3, libclang, pkg-config and a C compiler" >&2
+else
+  missing=()
+  for p in "${packages[@]}"; do
+    installed "$p" || missing+=("$p")
+  done
+  if [ ${#missing[@]} -gt 0 ]; then
+    # Debconf asks no questions; sudo is told so explicitly (it resets the environment).
+    export DEBIAN_FRONTEND=noninteractive
+    if [ "$(id -u)" -eq 0 ]; then
+      as_root=()
+    elif command -v sudo >/dev/null 2>&1; then
+      as_root=(sudo DEBIAN_FRONTEND=noninteractive)
+    else
+      echo "luxtally setup: missing ${missing[*]}, and not root and no sudo: as root, run" \
+        "\`apt-get update && apt-get install -y ${missing[*]}\`, then run this again" >&2
+      exit 1
+    fi
+    echo "luxtally setup: installing ${missing[*]}" >&2
+    "${as_root[@]}" apt-get update -qq
+    "${as_root[@]}" apt-get install -y -qq "${missing[@]}" >/dev/null
+  fi
 fi
+
 if ! command -v cargo >/dev/null 2>&1; then
   echo "luxtally setup: cargo not found: install Rust (https://rustup.rs), then run this again" >&2
   exit 1

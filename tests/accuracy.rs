@@ -183,15 +183,21 @@ fn stop_on_photons_emits_exactly_that_many() {
 }
 
 #[test]
-fn stop_on_time_limit_stops_just_after_it() {
+fn stop_on_time_limit_stops_at_the_first_epoch_past_it() {
     let scene = scene(&point_over_plane(4, 4));
     let s = run_until(&scene, |o| o.time_limit_s = Some(1.0));
     assert_eq!(s.stop_reason, Some("time"));
+    // At the first epoch boundary past the limit (how long an epoch takes depends on the
+    // machine's load: no wall-clock bound).
+    let n = s.history.len();
+    assert!(n >= 2, "{n} epochs");
     assert!(
-        s.elapsed_s >= 1.0 && s.elapsed_s < 1.5,
-        "stopped after {} s",
-        s.elapsed_s
+        s.history[n - 1].elapsed_s >= 1.0 && s.history[n - 2].elapsed_s < 1.0,
+        "last two epochs ended at {} s and {} s",
+        s.history[n - 2].elapsed_s,
+        s.history[n - 1].elapsed_s
     );
+    assert!(s.elapsed_s >= 1.0, "stopped after {} s", s.elapsed_s);
 }
 
 /// The last history point meets `goal` and the one before does not.
@@ -285,7 +291,6 @@ fn combined_criteria_first_met_wins() {
         o.target_error = Some(0.1);
     });
     assert_eq!(s.stop_reason, Some("target_error"));
-    assert!(s.elapsed_s < 60.0);
 }
 
 #[test]

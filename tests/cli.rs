@@ -182,15 +182,42 @@ fn obvhs_backend_without_the_feature_says_how_to_get_it() {
     );
 }
 
+/// Polls until `path` exists (a run's readiness signal). Fails the test at once when the
+/// child exits first, and after a generous bound meant only to end a hung run.
+fn wait_for_file(child: &mut std::process::Child, path: &std::path::Path) {
+    let start = std::time::Instant::now();
+    while !path.exists() {
+        if let Some(status) = child.try_wait().expect("wait") {
+            let mut err = String::new();
+            if let Some(mut e) = child.stderr.take() {
+                let _ = std::io::Read::read_to_string(&mut e, &mut err);
+            }
+            panic!(
+                "the run ended ({status}) before writing {}: {err}",
+                path.display()
+            );
+        }
+        if start.elapsed() > std::time::Duration::from_secs(600) {
+            let _ = child.kill();
+            panic!("no {} after 600 s: the run hangs", path.display());
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
 #[test]
 fn ctrl_c_stops_at_an_epoch_boundary_with_complete_outputs() {
     let out_dir = temp_dir("interrupt");
-    let child = Command::new(env!("CARGO_BIN_EXE_luxtally"))
+    // --report-every writes report.html at the end of the first epoch: the readiness
+    // signal (the Ctrl-C handler is in place and photons are traced).
+    let mut child = Command::new(env!("CARGO_BIN_EXE_luxtally"))
         .args([
             "run",
             "scenes/office.toml",
             "--photons",
             "100000000000",
+            "--report-every",
+            "3600",
             "--quiet",
             "--out",
             out_dir.to_str().unwrap(),
@@ -198,7 +225,7 @@ fn ctrl_c_stops_at_an_epoch_boundary_with_complete_outputs() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .expect("binary starts");
-    std::thread::sleep(std::time::Duration::from_millis(1500));
+    wait_for_file(&mut child, &out_dir.join("report.html"));
     let status = Command::new("kill")
         .args(["-INT", &child.id().to_string()])
         .status()

@@ -2,12 +2,6 @@
 //! with a single triangle geometry holding every triangle (so Embree's `primID` is the
 //! global triangle id), and the four query APIs (single, 8/16-wide packets, streams).
 
-#[cfg(embree4)]
-compile_error!(
-    "luxtally supports Embree 3 only (Embree 4 has no ray streams and another query API); \
-     install Debian's `libembree-dev` (3.13)"
-);
-
 use super::{HitBatch, RayApi, RayBatch, RayCaster};
 use crate::scene::Geometry;
 use crate::{Error, Result};
