@@ -93,7 +93,7 @@ pub(crate) fn parse(text: &str, origin: &str, dir: &Path) -> Result<Photometry> 
     let Some(tilt_index) = lines.iter().position(|l| tilt_spec(l).is_some()) else {
         return Err(at(
             origin,
-            lines.len().max(1),
+            text::last_content(&lines),
             "no `TILT=` line: not an LM-63 file, or one cut short in its keywords",
         ));
     };
@@ -113,7 +113,8 @@ pub(crate) fn parse(text: &str, origin: &str, dir: &Path) -> Result<Photometry> 
         ));
     } else {
         let path = dir.join(spec);
-        let tilt_text = text::read(&path)?;
+        let tilt_text =
+            text::read(&path).map_err(|e| at(origin, tilt_index + 1, format!("TILT file: {e}")))?;
         let tilt_origin = path.display().to_string();
         let tilt_lines = text::lines(&tilt_text);
         let mut tt = Tokens::new(&tilt_origin, &tilt_lines, 1);

@@ -15,15 +15,17 @@ const MAX_SETS: i64 = 1000;
 struct Lines<'a> {
     origin: &'a str,
     lines: Vec<&'a str>,
+    /// The last line with content: blank lines after it are the end of the file.
+    end: usize,
 }
 
 impl<'a> Lines<'a> {
     fn text(&self, n: usize, what: &str) -> Result<&'a str> {
-        match self.lines.get(n - 1) {
+        match self.lines.get(n - 1).filter(|_| n <= self.end) {
             Some(l) => Ok(l.trim()),
             None => Err(at(
                 self.origin,
-                self.lines.len().max(1),
+                self.end,
                 format!("the file ends before line {n} ({what})"),
             )),
         }
@@ -56,15 +58,29 @@ impl<'a> Lines<'a> {
 
 /// Parses EULUMDAT text; `origin` names the file in errors.
 pub(crate) fn parse(text_in: &str, origin: &str) -> Result<Photometry> {
+    let lines = text::lines(text_in);
     let f = Lines {
         origin,
-        lines: text::lines(text_in),
+        end: text::last_content(&lines),
+        lines,
     };
     let mut keywords = vec![("COMPANY".to_string(), f.text(1, "company")?.to_string())];
     let ityp = f.integer(2, "type indicator Ityp", 0, 3)?;
     keywords.push(("ITYP".into(), ityp.to_string()));
     let isym = f.integer(3, "symmetry indicator Isym", 0, 4)?;
     let mc = f.integer(4, "number of C-planes Mc", 1, MAX_ANGLES as i64)? as usize;
+    let divisor = match isym {
+        2 => 2,
+        3 | 4 => 4,
+        _ => 1,
+    };
+    if !mc.is_multiple_of(divisor) {
+        return Err(at(
+            origin,
+            4,
+            format!("Isym {isym} needs Mc divisible by {divisor}, not {mc}"),
+        ));
+    }
     let _dc = f.number(5, "C-plane distance Dc")?;
     let ng = f.integer(6, "number of γ angles Ng", 2, MAX_ANGLES as i64)? as usize;
     let _dg = f.number(7, "γ distance Dg")?;
@@ -167,18 +183,6 @@ pub(crate) fn parse(text_in: &str, origin: &str) -> Result<Photometry> {
         3 => (Symmetry::BilateralC90C270, 3 * mc / 4, mc / 2 + 1),
         _ => (Symmetry::Quadrant, 0, mc / 4 + 1),
     };
-    let divisor = match isym {
-        2 => 2,
-        3 | 4 => 4,
-        _ => 1,
-    };
-    if !mc.is_multiple_of(divisor) {
-        return Err(at(
-            origin,
-            4,
-            format!("Isym {isym} needs Mc divisible by {divisor}, not {mc}"),
-        ));
-    }
     // Angles of the stored planes, increasing through the wrap (C270 … C450 for Isym 3).
     let stored_deg: Vec<f64> = (0..stored)
         .map(|k| {

@@ -276,10 +276,20 @@ pub fn load(path: &Path) -> Result<Photometry> {
         _ => ies::looks_like_ies(&text),
     };
     if is_ies {
-        ies::parse(&text, &origin, dir)
+        parse_ies(&text, &origin, dir)
     } else {
-        ldt::parse(&text, &origin)
+        parse_ldt(&text, &origin)
     }
+}
+
+/// Parses LM-63 text; `origin` names it in errors, `dir` is where `TILT=<file>` is read.
+pub fn parse_ies(text: &str, origin: &str, dir: &Path) -> Result<Photometry> {
+    ies::parse(text, origin, dir)
+}
+
+/// Parses EULUMDAT text; `origin` names it in errors.
+pub fn parse_ldt(text: &str, origin: &str) -> Result<Photometry> {
+    ldt::parse(text, origin)
 }
 
 impl Photometry {

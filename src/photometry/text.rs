@@ -33,8 +33,20 @@ pub fn lines(text: &str) -> Vec<&str> {
         .collect()
 }
 
+/// The 1-based number of the last line with anything on it (1 if none): where a file
+/// that ends too early ends.
+pub fn last_content(lines: &[&str]) -> usize {
+    lines
+        .iter()
+        .rposition(|l| !l.trim().is_empty())
+        .map_or(1, |k| k + 1)
+}
+
 /// A finite number, or why not.
 pub fn number(token: &str) -> std::result::Result<f64, String> {
+    if token.is_empty() {
+        return Err("an empty line is not a number".into());
+    }
     match token.parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
         Ok(_) => Err(format!("`{token}` is not a finite number")),
@@ -77,7 +89,7 @@ impl<'a> Tokens<'a> {
                 }
             }
         }
-        let last_line = (first_line + lines.len()).saturating_sub(1).max(1);
+        let last_line = first_line + last_content(lines).saturating_sub(1);
         Tokens {
             origin,
             items,
