@@ -5,12 +5,14 @@
 //! `scene` (load and validate) → `accel` (ray casting backends) → `trace` (photon
 //! batches, epochs) → `tally` (receivers and triangle maps) → `stats` (equations of
 //! method.md, forecast, stop criteria) → `output` (summary.json and files) → `render`
-//! (the eye pass: images from a camera).
+//! (the eye pass: images from a camera). `photometry` reads luminaires' photometric
+//! files (IES LM-63, EULUMDAT) for the scene's lights.
 
 pub mod accel;
 pub mod bench;
 pub mod error;
 pub mod output;
+pub mod photometry;
 pub mod render;
 pub mod rng;
 pub mod run;

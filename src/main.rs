@@ -36,6 +36,14 @@ enum Command {
     Info { scene: PathBuf },
     /// Rebuild report.html and the receivers' PNG previews from OUT_DIR/summary.json.
     Report { out_dir: PathBuf },
+    /// Read a photometric file (IES LM-63 or EULUMDAT), print its flux, light output
+    /// ratio, peak and opening, and write its polar diagram (cd/klm) as PNG.
+    Photometry {
+        file: PathBuf,
+        /// The diagram's path (default: FILE's stem + `_polar.png` in the current directory).
+        #[arg(long, value_name = "PNG")]
+        out: Option<PathBuf>,
+    },
     /// Ray throughput of every backend and ray API on a scene (incoherent random rays),
     /// with Embree's own C loop over the same rays for comparison.
     BenchRays {
@@ -167,6 +175,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render_command(args),
         Command::Info { scene } => info_command(&scene),
         Command::Report { out_dir } => luxtally::output::rebuild_report(&out_dir),
+        Command::Photometry { file, out } => photometry_command(&file, out),
         Command::BenchRays {
             scene,
             rays,
@@ -547,6 +556,24 @@ fn info_command(path: &Path) -> Result<()> {
             r.cell_area_m2()
         );
     }
+    Ok(())
+}
+
+/// `photometry`: the file's facts on stdout, its polar diagram as PNG.
+fn photometry_command(file: &Path, out: Option<PathBuf>) -> Result<()> {
+    use luxtally::photometry;
+    let p = photometry::load(file)?;
+    let out = out.unwrap_or_else(|| {
+        let stem = file
+            .file_stem()
+            .map_or("luminaire".into(), |s| s.to_string_lossy());
+        PathBuf::from(format!("{stem}_polar.png"))
+    });
+    photometry::polar::write_polar_png(&p, &out)?;
+    for line in p.summary_lines() {
+        println!("{line}");
+    }
+    println!("polar diagram: {}", out.display());
     Ok(())
 }
 

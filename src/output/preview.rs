@@ -260,18 +260,23 @@ impl Canvas {
     }
 
     fn encode(&self) -> Result<Vec<u8>> {
-        let mut bytes = Vec::new();
-        let err = |e: png::EncodingError| Error::Unsupported(format!("PNG encoding: {e}"));
-        {
-            let mut enc = png::Encoder::new(&mut bytes, self.width as u32, self.height as u32);
-            enc.set_color(png::ColorType::Rgb);
-            enc.set_depth(png::BitDepth::Eight);
-            let mut writer = enc.write_header().map_err(err)?;
-            writer.write_image_data(&self.rgb).map_err(err)?;
-            writer.finish().map_err(err)?;
-        }
-        Ok(bytes)
+        encode_rgb_png(self.width, self.height, &self.rgb)
     }
+}
+
+/// An 8-bit RGB image (`rgb` row by row, 3 bytes a pixel) as PNG bytes.
+pub fn encode_rgb_png(width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>> {
+    let mut bytes = Vec::new();
+    let err = |e: png::EncodingError| Error::Unsupported(format!("PNG encoding: {e}"));
+    {
+        let mut enc = png::Encoder::new(&mut bytes, width as u32, height as u32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut writer = enc.write_header().map_err(err)?;
+        writer.write_image_data(rgb).map_err(err)?;
+        writer.finish().map_err(err)?;
+    }
+    Ok(bytes)
 }
 
 /// 3×5 glyphs, one row per entry, bit 2 = left column. Unknown characters are blank.

@@ -1,5 +1,5 @@
-//! A 3 × 5 pixel bitmap font for the false-colour scale's labels: digits, `.`, `-`, `e`
-//! and the letters of `cd/m2`.
+//! A 3 × 5 pixel bitmap font for the false-colour scale's labels and the photometric
+//! polar diagram: digits, `.`, `-`, `e` and the letters of `cd/m2`, `cd/klm` and `C`.
 
 /// Rows of a glyph, top first; bit 2 is the left column.
 fn glyph(c: char) -> Option<[u8; 5]> {
@@ -20,6 +20,9 @@ fn glyph(c: char) -> Option<[u8; 5]> {
         'c' => [0b000, 0b111, 0b100, 0b100, 0b111],
         'd' => [0b001, 0b111, 0b101, 0b101, 0b111],
         'm' => [0b000, 0b110, 0b111, 0b101, 0b101],
+        'k' => [0b100, 0b101, 0b110, 0b101, 0b101],
+        'l' => [0b110, 0b010, 0b010, 0b010, 0b111],
+        'C' => [0b111, 0b100, 0b100, 0b100, 0b111],
         '/' => [0b001, 0b001, 0b010, 0b100, 0b100],
         ' ' => [0; 5],
         _ => return None,

@@ -8,7 +8,7 @@
 //! false-colour PNG).
 
 mod eye;
-mod font;
+pub mod font;
 pub mod map;
 pub mod output;
 

@@ -1,0 +1,426 @@
+//! IES LM-63 (1986, 1991, 1995, 2002, 2019): the header line (or its absence), keyword
+//! lines up to `TILT=`, the tilt table (NONE, INCLUDE or a file), then the photometric
+//! records as numbers separated by blanks or commas across any line breaks.
+
+use super::expand::{c_planes, mirror_about_zero};
+use super::grid::{Grid, TYPE_A, TYPE_B, TYPE_C};
+use super::text::{self, at, check_increasing, check_range, Tokens, MAX_ANGLES, MAX_VALUES};
+use super::{Format, Opening, Parts, PhotometricType, Photometry, Symmetry, Tilt};
+use crate::Result;
+use std::path::Path;
+
+/// Feet to metres (units type 1).
+const FOOT_M: f64 = 0.3048;
+
+/// Whether a file of unknown extension reads as LM-63: an `IES…` first line or a
+/// `TILT=` line.
+pub fn looks_like_ies(text: &str) -> bool {
+    let lines = text::lines(text);
+    let first = lines.iter().find(|l| !l.trim().is_empty());
+    first.is_some_and(|l| l.trim().to_ascii_uppercase().starts_with("IES"))
+        || lines.iter().any(|l| tilt_spec(l).is_some())
+}
+
+/// The LM-63 edition a first line declares; None for a 1986 file (no header line).
+fn version(first: &str) -> std::result::Result<Option<u16>, String> {
+    let up = first.trim().to_ascii_uppercase();
+    let year = if let Some(y) = up.strip_prefix("IESNA:LM-63-") {
+        y.trim().parse::<u16>().ok()
+    } else if let Some(y) = up.strip_prefix("IES:LM-63-") {
+        y.trim().parse::<u16>().ok()
+    } else if let Some(y) = up.strip_prefix("IESNA") {
+        // IESNA91, and IESNA95 as files of 1995 (examp1.ies among them) wrote it.
+        match y.trim() {
+            "91" => Some(1991),
+            "95" => Some(1995),
+            _ => None,
+        }
+    } else if up.starts_with("IES:") {
+        None
+    } else {
+        return Ok(None);
+    };
+    match year {
+        Some(y @ (1991 | 1995 | 2002 | 2019)) => Ok(Some(y)),
+        _ => Err(format!(
+            "unknown LM-63 header `{}` (expected IESNA91, IESNA:LM-63-1995, \
+             IESNA:LM-63-2002 or IES:LM-63-2019)",
+            first.trim()
+        )),
+    }
+}
+
+/// What follows `TILT=` on a line that starts with it.
+fn tilt_spec(line: &str) -> Option<&str> {
+    let t = line.trim_start();
+    let head = t.get(..4)?;
+    if !head.eq_ignore_ascii_case("TILT") {
+        return None;
+    }
+    t[4..].trim_start().strip_prefix('=').map(str::trim)
+}
+
+/// A tilt table's four records: geometry, count, angles, factors.
+fn read_tilt(t: &mut Tokens) -> Result<Tilt> {
+    let origin = t.origin();
+    let (geometry, _) = t.integer("the tilt's lamp-to-luminaire geometry", 1, 3)?;
+    let (n, _) = t.integer("the number of tilt angles", 1, MAX_ANGLES as i64)?;
+    let (angles_deg, angle_lines) = t.numbers(n as usize, "tilt angle")?;
+    check_increasing(origin, &angles_deg, &angle_lines, "tilt angle")?;
+    let (factors, factor_lines) = t.numbers(n as usize, "tilt factor")?;
+    for (k, &f) in factors.iter().enumerate() {
+        if f < 0.0 {
+            return Err(at(
+                origin,
+                factor_lines[k],
+                format!("tilt factor {} is negative ({f})", k + 1),
+            ));
+        }
+    }
+    Ok(Tilt {
+        geometry: geometry as u8,
+        angles_deg,
+        factors,
+    })
+}
+
+/// Parses LM-63 text; `origin` names the file in errors, `dir` is where a `TILT=<file>`
+/// is looked for.
+pub(crate) fn parse(text: &str, origin: &str, dir: &Path) -> Result<Photometry> {
+    let lines = text::lines(text);
+    let year = version(lines[0]).map_err(|m| at(origin, 1, m))?;
+    let label_start = usize::from(year.is_some());
+    let Some(tilt_index) = lines.iter().position(|l| tilt_spec(l).is_some()) else {
+        return Err(at(
+            origin,
+            text::last_content(&lines),
+            "no `TILT=` line: not an LM-63 file, or one cut short in its keywords",
+        ));
+    };
+    let keywords = keywords(&lines[label_start.min(tilt_index)..tilt_index], year);
+    let spec = tilt_spec(lines[tilt_index]).unwrap_or_default();
+    let mut t = Tokens::new(origin, &lines[tilt_index + 1..], tilt_index + 2);
+
+    let tilt = if spec.eq_ignore_ascii_case("NONE") {
+        None
+    } else if spec.eq_ignore_ascii_case("INCLUDE") {
+        Some(read_tilt(&mut t)?)
+    } else if spec.is_empty() {
+        return Err(at(
+            origin,
+            tilt_index + 1,
+            "`TILT=` names neither NONE, INCLUDE nor a file",
+        ));
+    } else {
+        let path = dir.join(spec);
+        let tilt_text =
+            text::read(&path).map_err(|e| at(origin, tilt_index + 1, format!("TILT file: {e}")))?;
+        let tilt_origin = path.display().to_string();
+        let tilt_lines = text::lines(&tilt_text);
+        let mut tt = Tokens::new(&tilt_origin, &tilt_lines, 1);
+        let tilt = read_tilt(&mut tt)?;
+        tt.finish("of the tilt table")?;
+        Some(tilt)
+    };
+
+    // Record 1: ten values.
+    let (lamps, _) = t.integer("the number of lamps", 1, 1_000_000)?;
+    let (lumens, lumens_line) = t.number("the lumens per lamp")?;
+    if !(lumens > 0.0 || lumens == -1.0) {
+        return Err(at(
+            origin,
+            lumens_line,
+            format!("lumens per lamp {lumens}: must be positive, or −1 for absolute photometry"),
+        ));
+    }
+    let (multiplier, multiplier_line) = t.number("the candela multiplier")?;
+    positive(origin, multiplier_line, "candela multiplier", multiplier)?;
+    let (nv, _) = t.integer("the number of vertical angles", 2, MAX_ANGLES as i64)?;
+    let (nh, nh_line) = t.integer("the number of horizontal angles", 1, MAX_ANGLES as i64)?;
+    let (nv, nh) = (nv as usize, nh as usize);
+    if nv * nh > MAX_VALUES {
+        return Err(at(
+            origin,
+            nh_line,
+            format!("{nv} × {nh} candela values: more than {MAX_VALUES}"),
+        ));
+    }
+    let (kind, kind_line) = t.number("the photometric type")?;
+    let kind = match kind {
+        1.0 => PhotometricType::C,
+        2.0 => PhotometricType::B,
+        3.0 => PhotometricType::A,
+        _ => {
+            return Err(at(
+                origin,
+                kind_line,
+                format!("unknown photometric type {kind} (1 = C, 2 = B, 3 = A)"),
+            ))
+        }
+    };
+    let (units, units_line) = t.number("the units type")?;
+    let unit_m = match units {
+        1.0 => FOOT_M,
+        2.0 => 1.0,
+        _ => {
+            return Err(at(
+                origin,
+                units_line,
+                format!("unknown units type {units} (1 = feet, 2 = metres)"),
+            ))
+        }
+    };
+    let (width, _) = t.number("the luminous width")?;
+    let (length, _) = t.number("the luminous length")?;
+    let (height, _) = t.number("the luminous height")?;
+
+    // Record 2: three values.
+    let (ballast, ballast_line) = t.number("the ballast factor")?;
+    positive(origin, ballast_line, "ballast factor", ballast)?;
+    let (third, third_line) = t.number(if year == Some(2019) {
+        "the file generation type"
+    } else {
+        "the ballast-lamp photometric factor"
+    })?;
+    // LM-63-2019 reuses the field for how the file was made: not a factor.
+    let lamp_factor = if year == Some(2019) {
+        1.0
+    } else {
+        positive(origin, third_line, "ballast-lamp photometric factor", third)?;
+        third
+    };
+    let (watts, watts_line) = t.number("the input watts")?;
+    if watts < 0.0 {
+        return Err(at(
+            origin,
+            watts_line,
+            format!("input watts {watts} is negative"),
+        ));
+    }
+
+    let (vertical, v_lines) = t.numbers(nv, "vertical angle")?;
+    let (horizontal, h_lines) = t.numbers(nh, "horizontal angle")?;
+    let mut rows = Vec::new();
+    let mut table_line = 0;
+    for &h in &horizontal {
+        let (row, row_lines) =
+            t.numbers(nv, &format!("candela value at horizontal angle {h}°:"))?;
+        if table_line == 0 {
+            table_line = row_lines[0];
+        }
+        for (k, &cd) in row.iter().enumerate() {
+            if cd < 0.0 {
+                return Err(at(
+                    origin,
+                    row_lines[k],
+                    format!(
+                        "candela value {cd} at horizontal {h}°, vertical {}° is negative",
+                        vertical[k]
+                    ),
+                ));
+            }
+        }
+        rows.push(row);
+    }
+    t.finish(&format!("({nv} vertical × {nh} horizontal angles)"))?;
+
+    check_increasing(origin, &vertical, &v_lines, "vertical angle")?;
+    check_increasing(origin, &horizontal, &h_lines, "horizontal angle")?;
+    let tilt_factor = tilt.as_ref().map_or(1.0, |t| t.factor(0.0));
+    let lamp_output_factor = ballast * lamp_factor * tilt_factor;
+    let scale = multiplier * lamp_output_factor;
+    for row in &mut rows {
+        for v in row.iter_mut() {
+            *v *= scale;
+        }
+    }
+
+    let (symmetry, grid) = match kind {
+        PhotometricType::C => {
+            check_range(origin, &vertical, &v_lines, "vertical angle", 0.0, 180.0)?;
+            check_range(
+                origin,
+                &horizontal,
+                &h_lines,
+                "horizontal angle",
+                0.0,
+                360.0,
+            )?;
+            let symmetry = c_symmetry(&horizontal).ok_or_else(|| {
+                at(
+                    origin,
+                    h_lines[0],
+                    format!(
+                        "horizontal angles {}–{}°: type C stores 0, 0–90, 0–180, 90–270 or 0–360",
+                        horizontal[0],
+                        horizontal[nh - 1]
+                    ),
+                )
+            })?;
+            let (phi, planes) = c_planes(&horizontal, &rows, symmetry);
+            (symmetry, grid_of(TYPE_C, phi, vertical, &planes))
+        }
+        PhotometricType::A | PhotometricType::B => {
+            check_range(origin, &vertical, &v_lines, "vertical angle", -90.0, 90.0)?;
+            check_range(
+                origin,
+                &horizontal,
+                &h_lines,
+                "horizontal angle",
+                -90.0,
+                90.0,
+            )?;
+            if nh < 2 {
+                return Err(at(
+                    origin,
+                    h_lines[0],
+                    "types A and B need at least two horizontal angles",
+                ));
+            }
+            let (symmetry, (h, rows)) = if horizontal[0] == 0.0 {
+                (Symmetry::LateralH, mirror_about_zero(&horizontal, &rows))
+            } else {
+                (Symmetry::None, (horizontal, rows))
+            };
+            let lat = |a: &[f64]| a.iter().map(|x| 90.0 + x).collect::<Vec<_>>();
+            let grid = if kind == PhotometricType::A {
+                // Planes are H, the latitude is V.
+                grid_of(TYPE_A, h, lat(&vertical), &rows)
+            } else {
+                // Planes are V, the latitude is H: the rows transpose.
+                let planes: Vec<Vec<f64>> = (0..nv)
+                    .map(|v| rows.iter().map(|r| r[v]).collect())
+                    .collect();
+                grid_of(TYPE_B, vertical, lat(&h), &planes)
+            };
+            (symmetry, grid)
+        }
+    };
+
+    Photometry::build(Parts {
+        file: origin.to_string(),
+        format: Format::Ies(year.unwrap_or(1986)),
+        photometric_type: kind,
+        symmetry,
+        grid,
+        table_line,
+        opening: opening(width * unit_m, length * unit_m),
+        height_m: height.abs() * unit_m,
+        lamp_flux_lm: (lumens > 0.0).then_some(lamps as f64 * lumens),
+        lamp_output_factor,
+        input_watts: Some(watts),
+        stated_light_output_ratio: None,
+        stated_downward_fraction: None,
+        tilt,
+        keywords,
+        lamp_sets: Vec::new(),
+    })
+}
+
+fn positive(origin: &str, line: usize, what: &str, v: f64) -> Result<()> {
+    if v > 0.0 {
+        Ok(())
+    } else {
+        Err(at(origin, line, format!("{what} {v} must be positive")))
+    }
+}
+
+/// Type C's symmetry from its stored horizontal angles (increasing, within 0 … 360).
+fn c_symmetry(h: &[f64]) -> Option<Symmetry> {
+    let (first, last) = (h[0], h[h.len() - 1]);
+    match (h.len(), first, last) {
+        (1, _, _) => Some(Symmetry::Rotational),
+        (_, 0.0, 90.0) => Some(Symmetry::Quadrant),
+        (_, 0.0, 180.0) => Some(Symmetry::BilateralC0C180),
+        (_, 90.0, 270.0) => Some(Symmetry::BilateralC90C270),
+        // Full circle; a last plane short of 360 wraps to C = 0.
+        (_, 0.0, l) if l > 180.0 => Some(Symmetry::None),
+        _ => None,
+    }
+}
+
+/// A grid from planes (rows of values at `theta`).
+fn grid_of(axes: super::grid::Axes, phi: Vec<f64>, theta: Vec<f64>, planes: &[Vec<f64>]) -> Grid {
+    Grid {
+        axes,
+        phi_deg: phi,
+        theta_deg: theta,
+        cd: planes.concat(),
+    }
+}
+
+/// The opening of LM-63's width (along C90, y) and length (along C0, x), metres: both 0
+/// a point, both ≥ 0 a rectangle, a negative one round (a disc whose diameter is the
+/// non-zero one, or an ellipse if both differ).
+fn opening(width_m: f64, length_m: f64) -> Opening {
+    if width_m == 0.0 && length_m == 0.0 {
+        Opening::Point
+    } else if width_m >= 0.0 && length_m >= 0.0 {
+        Opening::Rectangle { length_m, width_m }
+    } else {
+        let (l, w) = (length_m.abs(), width_m.abs());
+        if l == 0.0 || w == 0.0 || l == w {
+            Opening::Disc {
+                diameter_m: l.max(w),
+            }
+        } else {
+            Opening::Ellipse {
+                length_m: l,
+                width_m: w,
+            }
+        }
+    }
+}
+
+/// `[KEY] value` lines (`[MORE]` continues the previous one); other lines — all of a
+/// 1986 file's label — under `LABEL`.
+fn keywords(lines: &[&str], year: Option<u16>) -> Vec<(String, String)> {
+    let mut out: Vec<(String, String)> = Vec::new();
+    for line in lines {
+        let l = line.trim();
+        if l.is_empty() {
+            continue;
+        }
+        let parsed = if year.is_some() {
+            l.strip_prefix('[')
+                .and_then(|r| r.split_once(']'))
+                .map(|(k, v)| (k.trim().to_ascii_uppercase(), v.trim().to_string()))
+        } else {
+            None
+        };
+        match parsed {
+            Some((k, v)) if k == "MORE" && !out.is_empty() => {
+                let last = out.len() - 1;
+                out[last].1.push('\n');
+                out[last].1.push_str(&v);
+            }
+            Some(kv) => out.push(kv),
+            None => out.push(("LABEL".into(), l.to_string())),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_lines_name_their_edition() {
+        assert_eq!(version("IESNA:LM-63-1995"), Ok(Some(1995)));
+        assert_eq!(version("IESNA:LM-63-2002 "), Ok(Some(2002)));
+        assert_eq!(version("IES:LM-63-2019"), Ok(Some(2019)));
+        assert_eq!(version("IESNA91"), Ok(Some(1991)));
+        assert_eq!(version("IESNA95"), Ok(Some(1995)));
+        assert_eq!(version("Some manufacturer"), Ok(None));
+        assert!(version("IESNA:LM-63-2031").is_err());
+    }
+
+    #[test]
+    fn tilt_lines_are_found_in_any_case_and_spacing() {
+        assert_eq!(tilt_spec("TILT=NONE"), Some("NONE"));
+        assert_eq!(tilt_spec("tilt = include "), Some("include"));
+        assert_eq!(tilt_spec("TILT=lamp.tlt"), Some("lamp.tlt"));
+        assert_eq!(tilt_spec("[TILTED] x"), None);
+    }
+}

@@ -1,0 +1,176 @@
+//! Emission directions that reproduce the bilinear interpolant exactly: a cell is chosen
+//! with probability equal to its share of the exact flux (Walker's alias table), then a
+//! direction uniform in solid angle inside the cell (φ uniform, cos θ uniform) is kept
+//! with probability I/I_max of the cell, else redrawn in the same cell. The density is
+//! then I(direction)/Φ, with no bias and unit-weight photons.
+
+use super::grid::Grid;
+use crate::trace::sampling::uniform;
+use glam::DVec3;
+use rand_pcg::Pcg32;
+
+/// One grid cell with non-zero flux, as the rejection step reads it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Cell {
+    phi0_rad: f64,
+    dphi_rad: f64,
+    theta0_rad: f64,
+    dtheta_rad: f64,
+    cos0: f64,
+    cos1: f64,
+    /// I at (φ0, θ0), (φ0, θ1), (φ1, θ0), (φ1, θ1).
+    corner_cd: [f64; 4],
+    max_cd: f64,
+}
+
+/// Walker's alias table over the cells (Vose's construction): O(1) per draw.
+#[derive(Clone, Debug, PartialEq)]
+struct Alias {
+    /// Probability of keeping column k rather than its alias, times 1.
+    keep: Vec<f64>,
+    alias: Vec<u32>,
+}
+
+impl Alias {
+    /// `weights` non-negative, finite, with a positive sum.
+    fn new(weights: &[f64]) -> Alias {
+        let n = weights.len();
+        let total: f64 = weights.iter().sum();
+        let mut scaled: Vec<f64> = weights.iter().map(|w| w * n as f64 / total).collect();
+        let mut keep = vec![1.0; n];
+        let mut alias: Vec<u32> = (0..n as u32).collect();
+        let (mut small, mut large): (Vec<usize>, Vec<usize>) =
+            (0..n).partition(|&k| scaled[k] < 1.0);
+        while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
+            small.pop();
+            keep[s] = scaled[s];
+            alias[s] = l as u32;
+            scaled[l] -= 1.0 - scaled[s];
+            if scaled[l] < 1.0 {
+                large.pop();
+                small.push(l);
+            }
+        }
+        // What is left is 1 up to rounding: kept whole.
+        Alias { keep, alias }
+    }
+
+    #[inline]
+    fn sample(&self, u_column: f64, u_keep: f64) -> usize {
+        let n = self.keep.len();
+        let k = ((u_column * n as f64) as usize).min(n - 1);
+        if u_keep < self.keep[k] {
+            k
+        } else {
+            self.alias[k] as usize
+        }
+    }
+}
+
+/// Samples emission directions of a [`Grid`] in proportion to its interpolant.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sampler {
+    cells: Vec<Cell>,
+    alias: Alias,
+}
+
+impl Sampler {
+    /// None when the grid emits nothing (no cell has positive flux).
+    pub fn new(grid: &Grid) -> Option<Sampler> {
+        let mut cells = Vec::new();
+        let mut weights = Vec::new();
+        for i in 0..grid.phi_deg.len() - 1 {
+            for j in 0..grid.n_theta() - 1 {
+                let flux = grid.cell_flux_lm(i, j);
+                if flux.is_nan() || flux <= 0.0 {
+                    continue;
+                }
+                let corner_cd = [
+                    grid.at(i, j),
+                    grid.at(i, j + 1),
+                    grid.at(i + 1, j),
+                    grid.at(i + 1, j + 1),
+                ];
+                let (t0, t1) = (
+                    grid.theta_deg[j].to_radians(),
+                    grid.theta_deg[j + 1].to_radians(),
+                );
+                cells.push(Cell {
+                    phi0_rad: grid.phi_deg[i].to_radians(),
+                    dphi_rad: (grid.phi_deg[i + 1] - grid.phi_deg[i]).to_radians(),
+                    theta0_rad: t0,
+                    dtheta_rad: t1 - t0,
+                    cos0: t0.cos(),
+                    cos1: t1.cos(),
+                    corner_cd,
+                    max_cd: corner_cd.iter().copied().fold(0.0, f64::max),
+                });
+                weights.push(flux);
+            }
+        }
+        if cells.is_empty() {
+            return None;
+        }
+        Some(Sampler {
+            alias: Alias::new(&weights),
+            cells,
+        })
+    }
+
+    /// A direction's (φ, θ) in radians, with cos θ and sin θ, distributed as I/Φ.
+    #[inline]
+    pub fn sample_rad(&self, rng: &mut Pcg32) -> (f64, f64, f64, f64) {
+        let c = &self.cells[self.alias.sample(uniform(rng), uniform(rng))];
+        loop {
+            let t = uniform(rng);
+            let cos_theta = c.cos0 - uniform(rng) * (c.cos0 - c.cos1);
+            let theta = cos_theta.clamp(-1.0, 1.0).acos();
+            let s = ((theta - c.theta0_rad) / c.dtheta_rad).clamp(0.0, 1.0);
+            let [i00, i01, i10, i11] = c.corner_cd;
+            let lo = i00 + s * (i01 - i00);
+            let hi = i10 + s * (i11 - i10);
+            let cd = lo + t * (hi - lo);
+            if uniform(rng) * c.max_cd < cd {
+                let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+                return (c.phi0_rad + t * c.dphi_rad, theta, cos_theta, sin_theta);
+            }
+        }
+    }
+
+    /// A unit direction of the luminaire frame, distributed as I/Φ.
+    #[inline]
+    pub fn sample_direction(&self, grid: &Grid, rng: &mut Pcg32) -> DVec3 {
+        let (phi, _, cos_theta, sin_theta) = self.sample_rad(rng);
+        let (sp, cp) = phi.sin_cos();
+        let a = &grid.axes;
+        (cos_theta * a.pole + sin_theta * (cp * a.zero + sp * a.ninety)).normalize()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn alias_table_reproduces_its_weights() {
+        let w = [1.0, 0.0, 3.0, 0.5, 5.5];
+        let a = Alias::new(&w);
+        // Exact probabilities from the table: (keep_k + Σ_{alias=k} (1 − keep)) / n.
+        let n = w.len() as f64;
+        let total: f64 = w.iter().sum();
+        for k in 0..w.len() {
+            let mut p = a.keep[k];
+            for m in 0..w.len() {
+                if a.alias[m] as usize == k && m != k {
+                    p += 1.0 - a.keep[m];
+                }
+            }
+            assert!(
+                (p / n - w[k] / total).abs() < 1e-12,
+                "{k}: {} vs {}",
+                p / n,
+                w[k] / total
+            );
+        }
+    }
+}
