@@ -5,7 +5,7 @@ use luxtally::accel::{self, Backend, RayCaster};
 use luxtally::output::{summary, write_atomic};
 use luxtally::render::{self, IndirectMap, MAP_FILE};
 use luxtally::run::{run_with, Observer, RunOptions, RunResult, RunState};
-use luxtally::scene::{Estimator, Scene};
+use luxtally::scene::{Estimator, LightKind, Scene};
 use luxtally::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -545,7 +545,29 @@ fn info_command(path: &Path) -> Result<()> {
         );
     }
     for l in &scene.lights {
-        println!("  {}: {:?}", l.label, l.kind);
+        match &l.kind {
+            LightKind::Luminaire(lum) => {
+                let p = &lum.photometry;
+                let peak = p.peak();
+                println!(
+                    "  {}: luminaire {} at {:.3?}: {:.1} lm (file {:.1} lm × {}), light output ratio {}, peak {:.1} cd at C {:.1}° γ {:.1}°, {} symmetry, opening {}",
+                    l.label,
+                    p.file,
+                    lum.position.to_array(),
+                    lum.flux_lm(),
+                    p.flux_lm(),
+                    lum.scale,
+                    p.light_output_ratio()
+                        .map_or("– (absolute photometry)".into(), |r| format!("{r:.3}")),
+                    peak.intensity_cd * lum.scale,
+                    peak.c_deg,
+                    peak.gamma_deg,
+                    p.symmetry.describe(),
+                    p.opening.describe()
+                );
+            }
+            kind => println!("  {}: {kind:?}", l.label),
+        }
     }
     for r in &scene.receivers {
         println!(

@@ -28,6 +28,7 @@ pub struct Summary {
     pub stop_reason: Option<&'static str>,
     pub total_flux_lm: f64,
     pub lights: Vec<LightSummary>,
+    pub luminaires: Vec<LuminaireSummary>,
     pub target: String,
     /// `history[].rel_error` and the forecast's target are absolute (`--absolute`, in
     /// the target's unit), not relative.
@@ -58,6 +59,22 @@ pub struct Summary {
 pub struct LightSummary {
     pub label: String,
     pub flux_lm: f64,
+}
+
+/// A photometric file the scene's luminaires use (once per file).
+#[derive(Serialize)]
+pub struct LuminaireSummary {
+    pub file: String,
+    /// Luminaires of the scene placed from it.
+    pub count: usize,
+    /// Flux of the file's interpolant (before `multiplier`/`flux_lm`), lm.
+    pub flux_lm: f64,
+    pub light_output_ratio: Option<f64>,
+    pub peak_cd: f64,
+    pub symmetry: &'static str,
+    pub opening: String,
+    /// The polar diagram (C0–180, C90–270 in cd/klm), a base64 PNG.
+    pub polar_png_base64: String,
 }
 
 #[derive(Serialize)]
@@ -196,6 +213,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
                 flux_lm: *f,
             })
             .collect(),
+        luminaires: luminaires(scene),
         target: state.target.describe(&scene.receivers),
         absolute_error: state.options.absolute,
         bounce_cap: state.setup.bounce_cap,
@@ -240,6 +258,35 @@ pub fn build(state: &RunState<'_>) -> Summary {
             _ => None,
         },
     }
+}
+
+/// One entry per photometric file of the scene's luminaires, in order of first use.
+fn luminaires(scene: &crate::scene::Scene) -> Vec<LuminaireSummary> {
+    use base64::Engine;
+    let mut out: Vec<LuminaireSummary> = Vec::new();
+    for light in &scene.lights {
+        let crate::scene::LightKind::Luminaire(l) = &light.kind else {
+            continue;
+        };
+        let p = &l.photometry;
+        if let Some(seen) = out.iter_mut().find(|s| s.file == p.file) {
+            seen.count += 1;
+            continue;
+        }
+        out.push(LuminaireSummary {
+            file: p.file.clone(),
+            count: 1,
+            flux_lm: p.flux_lm(),
+            light_output_ratio: p.light_output_ratio(),
+            peak_cd: p.peak_cd(),
+            symmetry: p.symmetry.describe(),
+            opening: p.opening.describe(),
+            polar_png_base64: crate::photometry::polar::polar_diagram_png(p)
+                .map(|png| base64::engine::general_purpose::STANDARD.encode(png))
+                .unwrap_or_default(),
+        });
+    }
+    out
 }
 
 /// The target's VOV: for a block (whose error is its worst cell's), the largest among

@@ -125,6 +125,30 @@ impl Opening {
         }
     }
 
+    /// The opening's largest extent, m (0 for a point).
+    pub fn diagonal_m(&self) -> f64 {
+        match *self {
+            Opening::Point => 0.0,
+            Opening::Rectangle { length_m, width_m } => length_m.hypot(width_m),
+            Opening::Disc { diameter_m } => diameter_m,
+            Opening::Ellipse { length_m, width_m } => length_m.max(width_m),
+        }
+    }
+
+    /// The point of the opening at (a, b) ∈ [0, 1)² (z = 0), metres: uniform (a, b) give
+    /// uniform points, and strata of (a, b) strata of the opening (discs and ellipses by
+    /// Shirley and Chiu's concentric map).
+    pub fn point_at(&self, a: f64, b: f64) -> DVec3 {
+        match *self {
+            Opening::Point => DVec3::ZERO,
+            Opening::Rectangle { length_m, width_m } => {
+                DVec3::new((a - 0.5) * length_m, (b - 0.5) * width_m, 0.0)
+            }
+            Opening::Disc { diameter_m } => concentric(a, b, diameter_m, diameter_m),
+            Opening::Ellipse { length_m, width_m } => concentric(a, b, length_m, width_m),
+        }
+    }
+
     /// `rectangle 1.231 × 0.259 m` and the like.
     pub fn describe(&self) -> String {
         match *self {
@@ -138,6 +162,23 @@ impl Opening {
             }
         }
     }
+}
+
+/// The concentric map of (u, v) ∈ [0, 1)² onto the ellipse of axes `a` (x) and `b` (y).
+fn concentric(u: f64, v: f64, a: f64, b: f64) -> DVec3 {
+    let (x, y) = (2.0 * u - 1.0, 2.0 * v - 1.0);
+    if x == 0.0 && y == 0.0 {
+        return DVec3::ZERO;
+    }
+    let (r, phi) = if x.abs() > y.abs() {
+        (x, std::f64::consts::FRAC_PI_4 * (y / x))
+    } else {
+        (
+            y,
+            std::f64::consts::FRAC_PI_2 - std::f64::consts::FRAC_PI_4 * (x / y),
+        )
+    };
+    DVec3::new(0.5 * a * r * phi.cos(), 0.5 * b * r * phi.sin(), 0.0)
 }
 
 /// Uniform in the ellipse of axes `a` (x) and `b` (y), by rejection from the square.
@@ -204,7 +245,7 @@ pub struct LampSet {
 /// A photometric file, normalised. The candela table includes every factor the file
 /// gives (multiplier, ballast factors, tilt at the photometered position, EULUMDAT's
 /// lamp-set flux and conversion factor); the scene's own `multiplier`/`flux_lm` are not.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Photometry {
     /// The file as the caller named it.
     pub file: String,

@@ -341,16 +341,18 @@ impl<'a> EyePass<'a> {
         const SHORT: f32 = 1.0 - 1e-5;
         let mut area_pattern = Vec::new();
         for light in 0..self.lights.emitters.len() {
-            if let Emitter::Area { corner, u, v, .. } = self.lights.emitters[light] {
-                // n × n jittered strata, from a stream of (tile, depth, ray): the same
-                // whatever the threads or the backend.
+            // n × n jittered strata over sources with an extent (area sources,
+            // luminaires' openings), from a stream of (tile, depth, ray): the same
+            // whatever the threads or the backend.
+            let (centre, diagonal) = self.lights.extent(light);
+            area_pattern.clear();
+            if diagonal > 0.0 {
                 let n = area_samples_per_side(
                     self.camera.area_light_samples,
-                    (u + v).length(),
-                    (corner + 0.5 * (u + v) - pd).length(),
+                    diagonal,
+                    (centre - pd).length(),
                 );
                 let mut rng = photon_stream(self.seed ^ 0xa5a5_a5a5_0000_0000, stream);
-                area_pattern.clear();
                 for k in 0..n * n {
                     let (i, j) = ((k / n) as f64, (k % n) as f64);
                     area_pattern.push((
@@ -358,6 +360,8 @@ impl<'a> EyePass<'a> {
                         (j + uniform(&mut rng)) / n as f64,
                     ));
                 }
+            } else {
+                area_pattern.push((0.5, 0.5));
             }
             self.lights.incoming(light, pd, &area_pattern, |inc| {
                 let (g, leave) = gain(inc.direction());

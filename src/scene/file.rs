@@ -89,6 +89,12 @@ pub struct LightFile {
     pub u: Option<[f64; 3]>,
     pub v: Option<[f64; 3]>,
     pub luminance_cdm2: Option<f64>,
+    /// Luminaires: the photometric file, where (one or many), how turned, how scaled.
+    pub file: Option<String>,
+    pub positions: Option<Vec<[f64; 3]>>,
+    pub aim: Option<[f64; 3]>,
+    pub rotate_deg: Option<f64>,
+    pub multiplier: Option<f64>,
 }
 
 #[derive(Deserialize, Debug)]

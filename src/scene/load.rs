@@ -11,11 +11,14 @@ use super::file::{
 use super::mesh_io;
 use super::shapes::{self, Mesh, Transform};
 use super::{
-    Camera, Estimator, Geometry, Light, LightKind, Material, Quantity, Receiver, Scene, Simulation,
+    Camera, Estimator, Geometry, Light, LightKind, Luminaire, Material, Quantity, Receiver, Scene,
+    Simulation,
 };
 use crate::error::{Error, Result};
+use crate::photometry::Photometry;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Loads and validates the scene file at `path`; relative mesh paths resolve against its
 /// directory.
@@ -65,19 +68,26 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
     }
     let geometry = builder.finish(origin)?;
 
-    let lights = raw
-        .lights
-        .into_iter()
-        .enumerate()
-        .map(|(i, value)| {
-            let path = format!("lights[{i}]");
-            let light: LightFile = file::entry(value, origin, &path)?;
-            Ok(Light {
+    let mut lights = Vec::new();
+    let mut photometry = PhotometryCache::default();
+    for (i, value) in raw.lights.into_iter().enumerate() {
+        let path = format!("lights[{i}]");
+        let light: LightFile = file::entry(value, origin, &path)?;
+        if light.kind == "luminaire" {
+            lights.extend(luminaires(
+                &light,
+                &path,
+                &at(&path),
+                base_dir,
+                &mut photometry,
+            )?);
+        } else {
+            lights.push(Light {
                 kind: light_kind(&light, &at(&path))?,
                 label: path,
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
+            });
+        }
+    }
 
     let mut receivers: Vec<Receiver> = Vec::new();
     for (i, value) in raw.receivers.into_iter().enumerate() {
@@ -445,6 +455,11 @@ fn light_kind(l: &LightFile, at: &str) -> Result<LightKind> {
         ("u", l.u.is_some()),
         ("v", l.v.is_some()),
         ("luminance_cdm2", l.luminance_cdm2.is_some()),
+        ("file", l.file.is_some()),
+        ("positions", l.positions.is_some()),
+        ("aim", l.aim.is_some()),
+        ("rotate_deg", l.rotate_deg.is_some()),
+        ("multiplier", l.multiplier.is_some()),
     ];
     let set = |allowed: &[&str]| forbid(&light_keys, allowed, at, &what);
     match l.kind.as_str() {
@@ -520,9 +535,91 @@ fn light_kind(l: &LightFile, at: &str) -> Result<LightKind> {
         }
         other => Err(Error::input(
             format!("{at}.type"),
-            format!("unknown light type `{other}` (expected \"point\", \"spot\", \"directional\" or \"area\")"),
+            format!("unknown light type `{other}` (expected \"point\", \"spot\", \"directional\", \"area\" or \"luminaire\")"),
         )),
     }
+}
+
+/// Photometric files loaded so far, by path: luminaires of one file share it.
+#[derive(Default)]
+struct PhotometryCache(Vec<(PathBuf, Arc<Photometry>)>);
+
+impl PhotometryCache {
+    fn load(&mut self, path: &Path) -> Result<Arc<Photometry>> {
+        if let Some((_, p)) = self.0.iter().find(|(q, _)| q == path) {
+            return Ok(p.clone());
+        }
+        let p = Arc::new(crate::photometry::load(path)?);
+        self.0.push((path.to_path_buf(), p.clone()));
+        Ok(p)
+    }
+}
+
+/// A `type = "luminaire"` entry: one light per position (`position`, or each of
+/// `positions`, labelled `lights[i].positions[k]`).
+fn luminaires(
+    l: &LightFile,
+    label: &str,
+    at: &str,
+    base_dir: &Path,
+    cache: &mut PhotometryCache,
+) -> Result<Vec<Light>> {
+    let what = "type \"luminaire\" lights";
+    let keys = [
+        ("direction", l.direction.is_some()),
+        ("intensity_cd", l.intensity_cd.is_some()),
+        ("cone_deg", l.cone_deg.is_some()),
+        ("falloff_deg", l.falloff_deg.is_some()),
+        ("illuminance_lx", l.illuminance_lx.is_some()),
+        ("corner", l.corner.is_some()),
+        ("u", l.u.is_some()),
+        ("v", l.v.is_some()),
+        ("luminance_cdm2", l.luminance_cdm2.is_some()),
+    ];
+    forbid(&keys, &[], at, what)?;
+    let file = required(l.file.as_ref(), at, "file", what)?;
+    let photometry = cache.load(&base_dir.join(file))?;
+    let positions: Vec<(String, DVec3)> = match (&l.position, &l.positions) {
+        (Some(p), None) => vec![(label.to_string(), vec3(*p))],
+        (None, Some(ps)) if !ps.is_empty() => ps
+            .iter()
+            .enumerate()
+            .map(|(k, p)| (format!("{label}.positions[{k}]"), vec3(*p)))
+            .collect(),
+        (None, Some(_)) => return Err(Error::input(format!("{at}.positions"), "is empty")),
+        _ => {
+            return Err(Error::input(
+                at,
+                "give exactly one of `position` and `positions`",
+            ))
+        }
+    };
+    let aim = direction(l.aim.unwrap_or([0.0, 0.0, -1.0]), at, "aim")?;
+    let multiplier = amount(l.multiplier.unwrap_or(1.0), at, "multiplier")?;
+    let file_flux = photometry.flux_lm();
+    let rescale = match l.flux_lm {
+        None => 1.0,
+        Some(f) if file_flux > 0.0 => amount(f, at, "flux_lm")? / file_flux,
+        Some(_) => {
+            return Err(Error::input(
+                format!("{at}.flux_lm"),
+                format!("`{file}` emits no flux: it cannot be rescaled"),
+            ))
+        }
+    };
+    let frame = Luminaire::frame(aim, l.rotate_deg.unwrap_or(0.0));
+    Ok(positions
+        .into_iter()
+        .map(|(label, position)| Light {
+            label,
+            kind: LightKind::Luminaire(Luminaire {
+                photometry: photometry.clone(),
+                position,
+                frame,
+                scale: multiplier * rescale,
+            }),
+        })
+        .collect())
 }
 
 fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {

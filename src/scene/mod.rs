@@ -4,8 +4,10 @@
 //! Every other position in `Scene` (lights, receivers) stays in world coordinates (f64);
 //! `Geometry::origin` maps between the two frames: world = origin + local.
 
-use glam::{DVec3, Vec3};
+use crate::photometry::Photometry;
+use glam::{DMat3, DVec3, Vec3};
 use std::path::PathBuf;
+use std::sync::Arc;
 
 pub mod file;
 mod load;
@@ -129,6 +131,41 @@ pub enum LightKind {
         v: DVec3,
         luminance_cdm2: f64,
     },
+    /// A luminaire from a photometric file (docs/photometry.md).
+    Luminaire(Luminaire),
+}
+
+/// A luminaire placed in the scene: its photometry (shared by every luminaire of the
+/// same file), where it is and how it is turned.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Luminaire {
+    pub photometry: Arc<Photometry>,
+    /// World position of the centre of its luminous opening.
+    pub position: DVec3,
+    /// Luminaire frame (x = C0, y = C90, z = up, nadir −z) → world.
+    pub frame: DMat3,
+    /// Factor on the file's intensities: `multiplier`, times the `flux_lm` rescaling.
+    pub scale: f64,
+}
+
+impl Luminaire {
+    /// The frame that turns the nadir (−z) to `aim` (unit) by the shortest rotation (a
+    /// half turn about x when `aim` is straight up), then turns C0 about `aim` by
+    /// `rotate_deg` (counter-clockwise seen from where the light goes).
+    pub fn frame(aim: DVec3, rotate_deg: f64) -> DMat3 {
+        let nadir = -DVec3::Z;
+        let turn = if aim.dot(nadir) < -1.0 + 1e-12 {
+            DMat3::from_rotation_x(std::f64::consts::PI)
+        } else {
+            DMat3::from_quat(glam::DQuat::from_rotation_arc(nadir, aim))
+        };
+        DMat3::from_axis_angle(-aim, rotate_deg.to_radians()) * turn
+    }
+
+    /// Flux of the luminaire as placed, lm.
+    pub fn flux_lm(&self) -> f64 {
+        self.photometry.flux_lm() * self.scale
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]

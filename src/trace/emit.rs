@@ -4,10 +4,12 @@
 use super::sampling::{
     cosine_hemisphere, uniform, uniform_cone, uniform_disk, uniform_sphere, SphericalRect,
 };
+use crate::photometry::Photometry;
 use crate::scene::{LightKind, Scene};
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 use rand_pcg::Pcg32;
 use std::f64::consts::{PI, TAU};
+use std::sync::Arc;
 
 /// One light, prepared for sampling (positions in the scene's local frame).
 #[derive(Clone, Debug)]
@@ -34,6 +36,13 @@ pub enum Emitter {
         u: DVec3,
         v: DVec3,
         normal: DVec3,
+    },
+    /// A luminaire: photons leave its opening (centred on `position`, luminaire frame
+    /// `frame`) in directions drawn from its photometry.
+    Luminaire {
+        position: DVec3,
+        frame: DMat3,
+        photometry: Arc<Photometry>,
     },
 }
 
@@ -76,6 +85,7 @@ pub fn light_flux_lm(kind: &LightKind, scene_radius: f64) -> f64 {
             luminance_cdm2,
             ..
         } => PI * luminance_cdm2 * u.cross(v).length(),
+        LightKind::Luminaire(ref l) => l.flux_lm(),
     }
 }
 
@@ -85,9 +95,9 @@ pub fn light_flux_lm(kind: &LightKind, scene_radius: f64) -> f64 {
 pub struct Emitters {
     pub emitters: Vec<Emitter>,
     pub flux_lm: Vec<f64>,
-    /// The amount the deterministic direct light scales with: intensity (cd) of point
-    /// and spot sources, illuminance (lx) of directional ones, luminance (cd/m²) of
-    /// area sources.
+    /// The amount the direct light scales with: intensity (cd) of point and spot
+    /// sources, illuminance (lx) of directional ones, luminance (cd/m²) of area sources,
+    /// the factor on the file's intensities of luminaires.
     pub intensity_scale: Vec<f64>,
     pub total_flux_lm: f64,
     cdf: Vec<f64>,
@@ -110,6 +120,7 @@ impl Emitters {
                 }
                 LightKind::Directional { illuminance_lx, .. } => illuminance_lx,
                 LightKind::Area { luminance_cdm2, .. } => luminance_cdm2,
+                LightKind::Luminaire(ref l) => l.scale,
             });
             emitters.push(match light.kind {
                 LightKind::Point { position, .. } => Emitter::Point {
@@ -141,6 +152,11 @@ impl Emitters {
                     u,
                     v,
                     normal: u.cross(v).normalize(),
+                },
+                LightKind::Luminaire(ref l) => Emitter::Luminaire {
+                    position: l.position - origin,
+                    frame: l.frame,
+                    photometry: l.photometry.clone(),
                 },
             });
         }
@@ -213,6 +229,14 @@ impl Emitters {
                 let p = corner + u * uniform(rng) + v * uniform(rng);
                 (p, cosine_hemisphere(rng, normal))
             }
+            Emitter::Luminaire {
+                position,
+                frame,
+                ref photometry,
+            } => {
+                let p = position + frame * photometry.opening.sample_point_m(rng);
+                (p, frame * photometry.sample_direction(rng))
+            }
         }
     }
 }
@@ -249,6 +273,21 @@ impl Incoming {
 }
 
 impl Emitters {
+    /// Centre and diagonal (m) of the light's emitting extent: an area source, a
+    /// luminaire's opening; diagonal 0 for point-like and directional sources.
+    pub fn extent(&self, light: usize) -> (DVec3, f64) {
+        match self.emitters[light] {
+            Emitter::Area { corner, u, v, .. } => (corner + 0.5 * (u + v), (u + v).length()),
+            Emitter::Luminaire {
+                position,
+                ref photometry,
+                ..
+            } => (position, photometry.opening.diagonal_m()),
+            Emitter::Point { position } | Emitter::Spot { position, .. } => (position, 0.0),
+            Emitter::Directional { disk_center, .. } => (disk_center, 0.0),
+        }
+    }
+
     /// The light of source `light` arriving at local point `p` (method.md eqs. 1–2),
     /// piece by piece: one piece for point, spot and directional sources; for an area
     /// source one per point of `area_pattern` ([0, 1)² coordinates), each standing for
@@ -295,6 +334,22 @@ impl Emitters {
                 distance: f64::INFINITY,
                 normal_lx: scale,
             }),
+            // Every point of the opening emits the file's distribution, I/A per unit
+            // area (as the photons leave it): one equal share of the opening per piece.
+            Emitter::Luminaire {
+                position,
+                frame,
+                ref photometry,
+            } => {
+                let share = scale / area_pattern.len().max(1) as f64;
+                for &(a, b) in area_pattern {
+                    let q = position + frame * photometry.opening.point_at(a, b);
+                    let towards_p = frame.transpose() * (p - q);
+                    if towards_p != DVec3::ZERO {
+                        from_point(q, share * photometry.intensity_toward_cd(towards_p));
+                    }
+                }
+            }
             Emitter::Area {
                 corner,
                 u,
