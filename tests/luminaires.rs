@@ -322,3 +322,26 @@ fn bad_luminaire_entries_name_the_key() {
         assert_eq!(e.lines().count(), 1, "{e}");
     }
 }
+
+#[test]
+fn a_tilted_luminaire_takes_its_files_tilt_factor() {
+    // tilt_include.ies: factors 0.9, 0.85, 0.8, 0.7 at 0, 30, 60, 90°; the table holds
+    // the 0° output. Aimed sideways (tilt 90°) it emits 0.7/0.9 of it; at 45°, 0.825/0.9.
+    let p = photometry_of("tilt_include.ies");
+    for (aim, factor) in [
+        ("[0, 0, -1]", 1.0),
+        ("[1, 0, 0]", 0.7 / 0.9),
+        ("[1, 0, -1]", 0.825 / 0.9),
+    ] {
+        let s = run_scene(
+            &over_black_plane(&data("tilt_include.ies"), &format!("aim = {aim}")),
+            1000,
+        );
+        assert!(
+            (s.total_flux_lm - factor * p.flux_lm()).abs() < 1e-9 * p.flux_lm(),
+            "aim {aim}: {} vs {}",
+            s.total_flux_lm,
+            factor * p.flux_lm()
+        );
+    }
+}

@@ -607,6 +607,15 @@ fn luminaires(
             ))
         }
     };
+    // The table holds the lamp's output at the photometered position (tilt 0); a
+    // luminaire tilted from it (aim away from straight down) gets the file's tilt
+    // factor at that angle relative to it.
+    let tilt = match &photometry.tilt {
+        Some(t) if t.factor(0.0) > 0.0 => {
+            t.factor(aim.dot(-DVec3::Z).clamp(-1.0, 1.0).acos().to_degrees()) / t.factor(0.0)
+        }
+        _ => 1.0,
+    };
     let frame = Luminaire::frame(aim, l.rotate_deg.unwrap_or(0.0));
     Ok(positions
         .into_iter()
@@ -616,7 +625,7 @@ fn luminaires(
                 photometry: photometry.clone(),
                 position,
                 frame,
-                scale: multiplier * rescale,
+                scale: multiplier * rescale * tilt,
             }),
         })
         .collect())

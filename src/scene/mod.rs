@@ -144,7 +144,8 @@ pub struct Luminaire {
     pub position: DVec3,
     /// Luminaire frame (x = C0, y = C90, z = up, nadir −z) → world.
     pub frame: DMat3,
-    /// Factor on the file's intensities: `multiplier`, times the `flux_lm` rescaling.
+    /// Factor on the file's intensities: `multiplier`, times the `flux_lm` rescaling,
+    /// times the file's tilt factor at the luminaire's tilt (relative to tilt 0).
     pub scale: f64,
 }
 
