@@ -167,10 +167,11 @@ impl<'a> EyePass<'a> {
             s.shadow.clear();
             s.shadow_gain.clear();
             for k in 0..s.rays.len() {
-                // (tile, ray in the queue, depth): unique below 2²⁸ tiles, 2³⁰ rays a
-                // queue and 64 bounces; `photon_stream` mixes it.
+                // (tile, ray in the queue, depth): unique below 2²⁷ tiles, 2³⁰ rays a
+                // queue and depths 0..=127 (max_depth ≤ 64 needs 7 bits); `photon_stream`
+                // mixes it.
                 let tile = (first / TILE_PIXELS) as u64;
-                let stream = tile << 36 | (k as u64 & ((1 << 30) - 1)) << 6 | depth as u64;
+                let stream = tile << 37 | (k as u64 & ((1 << 30) - 1)) << 7 | depth as u64;
                 self.shade(k, depth < self.camera.max_depth, stream, s, &mut sample_l);
             }
             if !s.shadow.is_empty() {
