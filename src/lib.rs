@@ -8,6 +8,9 @@
 //! (the eye pass: images from a camera). `photometry` reads luminaires' photometric
 //! files (IES LM-63, EULUMDAT) for the scene's lights.
 
+// `!(x > 0.0)` is deliberate throughout: it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod accel;
 pub mod bench;
 pub mod error;
