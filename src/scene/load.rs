@@ -441,9 +441,9 @@ fn amount(x: f64, at: &str, key: &str) -> Result<f64> {
     }
 }
 
-fn light_kind(l: &LightFile, at: &str) -> Result<LightKind> {
-    let what = format!("type \"{}\" lights", l.kind);
-    let light_keys = [
+/// The keys of every light type, and whether a `[[lights]]` entry sets each.
+fn light_keys(l: &LightFile) -> [(&'static str, bool); 16] {
+    [
         ("position", l.position.is_some()),
         ("direction", l.direction.is_some()),
         ("intensity_cd", l.intensity_cd.is_some()),
@@ -460,7 +460,12 @@ fn light_kind(l: &LightFile, at: &str) -> Result<LightKind> {
         ("aim", l.aim.is_some()),
         ("rotate_deg", l.rotate_deg.is_some()),
         ("multiplier", l.multiplier.is_some()),
-    ];
+    ]
+}
+
+fn light_kind(l: &LightFile, at: &str) -> Result<LightKind> {
+    let what = format!("type \"{}\" lights", l.kind);
+    let light_keys = light_keys(l);
     let set = |allowed: &[&str]| forbid(&light_keys, allowed, at, &what);
     match l.kind.as_str() {
         "point" => {
@@ -565,18 +570,20 @@ fn luminaires(
     cache: &mut PhotometryCache,
 ) -> Result<Vec<Light>> {
     let what = "type \"luminaire\" lights";
-    let keys = [
-        ("direction", l.direction.is_some()),
-        ("intensity_cd", l.intensity_cd.is_some()),
-        ("cone_deg", l.cone_deg.is_some()),
-        ("falloff_deg", l.falloff_deg.is_some()),
-        ("illuminance_lx", l.illuminance_lx.is_some()),
-        ("corner", l.corner.is_some()),
-        ("u", l.u.is_some()),
-        ("v", l.v.is_some()),
-        ("luminance_cdm2", l.luminance_cdm2.is_some()),
-    ];
-    forbid(&keys, &[], at, what)?;
+    forbid(
+        &light_keys(l),
+        &[
+            "position",
+            "positions",
+            "file",
+            "aim",
+            "rotate_deg",
+            "multiplier",
+            "flux_lm",
+        ],
+        at,
+        what,
+    )?;
     let file = required(l.file.as_ref(), at, "file", what)?;
     let photometry = cache.load(&base_dir.join(file))?;
     let positions: Vec<(String, DVec3)> = match (&l.position, &l.positions) {
