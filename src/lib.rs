@@ -5,11 +5,13 @@
 //! `scene` (load and validate) → `accel` (ray casting backends) → `trace` (photon
 //! batches, epochs) → `tally` (receivers and triangle maps) → `stats` (equations of
 //! method.md, forecast, stop criteria) → `output` (summary.json and files) → `render`
-//! (the eye pass: images from a camera).
+//! (the eye pass: images from a camera). `limits` sizes a run from all of them before
+//! it allocates.
 
 pub mod accel;
 pub mod bench;
 pub mod error;
+pub mod limits;
 pub mod output;
 pub mod render;
 pub mod rng;

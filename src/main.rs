@@ -2,6 +2,7 @@
 
 use clap::{Parser, Subcommand};
 use luxtally::accel::{self, Backend, RayCaster};
+use luxtally::limits;
 use luxtally::output::{summary, write_atomic};
 use luxtally::render::{self, IndirectMap, MAP_FILE};
 use luxtally::run::{run_with, Observer, RunOptions, RunResult, RunState};
@@ -123,6 +124,10 @@ struct RunArgs {
     /// Rewrite report.html every SECONDS during the run (the page reloads itself).
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     report_every: Option<f64>,
+    /// Refuse to start when the run is estimated to need more memory than SIZE (512M,
+    /// 8G, 8GiB or bytes; default: the memory available now).
+    #[arg(long, value_name = "SIZE")]
+    max_memory: Option<String>,
 }
 
 #[derive(clap::Args)]
@@ -286,11 +291,42 @@ fn run_options(args: &RunArgs, scene: &Scene) -> Result<RunOptions> {
     Ok(options)
 }
 
-/// `--out`, or `out/<scene name>/`, created.
-fn out_dir(out: Option<&Path>, scene: &Scene) -> Result<PathBuf> {
-    let out = out.map_or_else(|| Path::new("out").join(&scene.name), Path::to_path_buf);
-    std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
-    Ok(out)
+/// `--out`, or `out/<scene name>/`, created (after the checks that can refuse a run).
+fn out_dir(out: Option<&Path>, scene: &Scene) -> Result<OutDir> {
+    let path = out.map_or_else(|| Path::new("out").join(&scene.name), Path::to_path_buf);
+    let created = !path.exists();
+    std::fs::create_dir_all(&path).map_err(|e| Error::io(&path, e))?;
+    Ok(OutDir { path, created })
+}
+
+/// An output folder, and whether this command created it.
+struct OutDir {
+    path: PathBuf,
+    created: bool,
+}
+
+impl OutDir {
+    /// `result`, after removing the folder if the command created it, failed and left
+    /// it empty (a failed run leaves no empty output folder behind).
+    fn keep_on<T>(&self, result: Result<T>) -> Result<T> {
+        if result.is_err() && self.created {
+            // Fails, as it should, when the folder is not empty.
+            let _ = std::fs::remove_dir(&self.path);
+        }
+        result
+    }
+}
+
+/// The memory budget of `run` and `render` (`--max-memory`, else the memory available),
+/// checked against the scene file's built-in shapes before the loader tessellates them.
+fn budget_for(args: &RunArgs) -> Result<limits::Budget> {
+    let budget = limits::Budget::new(args.max_memory.as_deref())?;
+    let backend = match &args.backend {
+        Some(b) => b.parse::<Backend>()?,
+        None => Backend::default(),
+    };
+    limits::check_scene_file(&args.scene, backend, &budget)?;
+    Ok(budget)
 }
 
 /// The photon pass shared by `run` and `render`: runs with all stop criteria and writes
@@ -337,18 +373,26 @@ fn photon_pass(
 }
 
 fn run_command(args: RunArgs) -> Result<()> {
+    let budget = budget_for(&args)?;
     let scene = luxtally::scene::load(&args.scene)?;
     let options = run_options(&args, &scene)?;
-    let out = out_dir(args.out.as_deref(), &scene)?;
+    limits::check_run(&scene, &options, None, true, &budget)?;
+    let dir = out_dir(args.out.as_deref(), &scene)?;
+    dir.keep_on(run_into(&args, &scene, &options, &dir.path))
+}
+
+/// `run` once its output folder exists.
+fn run_into(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> Result<()> {
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
-    let result = photon_pass(&args, &scene, &options, caster.as_ref(), setup, &out)?;
-    print_run(&args, &result.state(&scene, &options), &out);
+    let result = photon_pass(args, scene, options, caster.as_ref(), setup, out)?;
+    print_run(args, &result.state(scene, options), out);
     Ok(())
 }
 
 /// `render`: the photon pass (or a saved map with --from), then the eye pass.
 fn render_command(args: RenderArgs) -> Result<()> {
+    let budget = budget_for(&args.run)?;
     let mut scene = luxtally::scene::load(&args.run.scene)?;
     let options = run_options(&args.run, &scene)?;
     // Checked before the photon pass, which may be long.
@@ -357,26 +401,45 @@ fn render_command(args: RenderArgs) -> Result<()> {
         camera.interpolate = false;
     }
     scene.camera = Some(camera.clone());
-    let out = out_dir(args.run.out.as_deref().or(args.from.as_deref()), &scene)?;
+    limits::check_run(
+        &scene,
+        &options,
+        Some(&camera),
+        args.from.is_none(),
+        &budget,
+    )?;
+    let dir = out_dir(args.run.out.as_deref().or(args.from.as_deref()), &scene)?;
+    dir.keep_on(render_into(&args, &scene, &options, &camera, &dir.path))
+}
+
+/// `render` once its output folder exists: the photon pass (or the saved map), then
+/// the image.
+fn render_into(
+    args: &RenderArgs,
+    scene: &Scene,
+    options: &RunOptions,
+    camera: &luxtally::scene::Camera,
+    out: &Path,
+) -> Result<()> {
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
     let map = match &args.from {
-        Some(dir) => IndirectMap::load(&dir.join(MAP_FILE), &scene)?,
+        Some(dir) => IndirectMap::load(&dir.join(MAP_FILE), scene)?,
         None => {
-            let result = photon_pass(&args.run, &scene, &options, caster.as_ref(), setup, &out)?;
-            print_run(&args.run, &result.state(&scene, &options), &out);
-            IndirectMap::from_tallies(&scene, &result.tallies, result.setup.total_flux_lm)
+            let result = photon_pass(&args.run, scene, options, caster.as_ref(), setup, out)?;
+            print_run(&args.run, &result.state(scene, options), out);
+            IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
         }
     };
     let r = render::render(
-        &scene,
-        &camera,
+        scene,
+        camera,
         &map,
         caster.as_ref(),
         options.seed,
         options.threads,
     )?;
-    render::output::write_all(&r.image, &out)?;
+    render::output::write_all(&r.image, out)?;
     if !args.run.quiet {
         println!(
             "render: {}×{} px, {} samples/px, {} eye rays + {} shadow rays in {:.2} s \
