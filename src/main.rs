@@ -1,5 +1,7 @@
 //! The `luxtally` command line: parses, calls the library, prints one line on error.
 
+mod progress;
+
 use clap::{Parser, Subcommand};
 use luxtally::accel::{self, Backend, RayCaster};
 use luxtally::limits;
@@ -8,7 +10,7 @@ use luxtally::render::{self, IndirectMap, MAP_FILE};
 use luxtally::run::{run_with, Observer, RunOptions, RunResult, RunState};
 use luxtally::scene::{Estimator, Scene};
 use luxtally::{Error, Result};
-use std::io::Write;
+use progress::Progress;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -191,13 +193,16 @@ fn main() -> ExitCode {
             } else {
                 luxtally::scene::load(&scene)?
             };
+            let spinner = Progress::spinner();
             let table = luxtally::bench::bench_photons(
                 &scene,
                 photons,
                 threads.unwrap_or_else(all_cores),
                 backend.parse()?,
-            )?;
-            print!("{table}");
+                &|what| spinner.message(format!("bench-photons: {what}")),
+            );
+            spinner.clear();
+            print!("{}", table?);
             Ok(())
         })(),
         Command::BenchAccuracy {
@@ -220,6 +225,7 @@ fn main() -> ExitCode {
                     }
                 };
             let estimator = estimator.as_deref().map(parse_estimator).transpose()?;
+            let spinner = Progress::spinner();
             let report = luxtally::bench::bench_accuracy(
                 &scene,
                 &receiver,
@@ -227,8 +233,10 @@ fn main() -> ExitCode {
                 target_error,
                 time_limit,
                 threads.unwrap_or_else(all_cores),
-            )?;
-            print!("{report}");
+                &|what| spinner.message(format!("bench-accuracy: {what}")),
+            );
+            spinner.clear();
+            print!("{}", report?);
             Ok(())
         })(),
     };
@@ -350,7 +358,7 @@ fn photon_pass(
         });
     }
     let mut observer = CliObserver {
-        quiet: args.quiet,
+        progress: Progress::new(args.quiet, PER_MILLE, progress::RUN_TEMPLATE),
         out: out.to_path_buf(),
         last_save: Instant::now(),
         save_error: None,
@@ -358,10 +366,11 @@ fn photon_pass(
         last_report: None,
     };
     let result = run_with(scene, options, caster, setup, &interrupt, &mut observer)?;
-    if !args.quiet {
-        eprintln!();
-    }
     let state = result.state(scene, options);
+    let interrupted = result.stop_reason == luxtally::stats::stop::StopReason::Interrupted;
+    observer
+        .progress
+        .finish(!interrupted, progress_line(&state));
     save_summary(out, &state)?;
     luxtally::output::write_run_files(out, &state)?;
     if let Some(e) = observer.save_error {
@@ -431,14 +440,26 @@ fn render_into(
             IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
         }
     };
-    let r = render::render(
+    let pixels = camera.resolution.map(u64::from).iter().product::<u64>();
+    let progress = Progress::new(args.run.quiet, pixels, progress::RENDER_TEMPLATE);
+    let start = Instant::now();
+    let line = |done: u64| {
+        format!(
+            "render: {:.0} % of {pixels} pixels in {:.1} s",
+            100.0 * done as f64 / pixels as f64,
+            start.elapsed().as_secs_f64()
+        )
+    };
+    let r = render::render_with(
         scene,
         camera,
         &map,
         caster.as_ref(),
         options.seed,
         options.threads,
+        &|n| progress.inc(n as u64, line),
     )?;
+    progress.finish(true, line(pixels));
     render::output::write_all(&r.image, out)?;
     if !args.run.quiet {
         println!(
@@ -497,10 +518,10 @@ fn save_summary(out: &Path, state: &RunState<'_>) -> Result<()> {
     write_atomic(&out.join("summary.json"), &json)
 }
 
-/// Progress line on stderr and a summary.json saved every few seconds, so a long run
-/// never loses the work already done.
+/// Progress on stderr and a summary.json saved every few seconds, so a long run never
+/// loses the work already done.
 struct CliObserver {
-    quiet: bool,
+    progress: Progress,
     out: PathBuf,
     last_save: Instant,
     save_error: Option<Error>,
@@ -511,40 +532,64 @@ struct CliObserver {
 
 const SAVE_EVERY_S: f64 = 10.0;
 
+/// A run's progress bar counts thousandths of the run.
+const PER_MILLE: u64 = 1000;
+
+/// Seconds until the run's first stop criterion is met, as far as they can be told: the
+/// accuracy forecast, the photons left at the current rate, the time limit.
+fn remaining_s(state: &RunState<'_>) -> Option<f64> {
+    let rate = state.tallies.photons as f64 / state.elapsed_s.max(1e-9);
+    let by_forecast = state.forecast.map(|f| f.total_s - state.elapsed_s);
+    let by_photons = state
+        .options
+        .photons
+        .map(|n| n.saturating_sub(state.tallies.photons) as f64 / rate);
+    let by_time = state.options.time_limit_s.map(|t| t - state.elapsed_s);
+    [by_forecast, by_photons, by_time]
+        .into_iter()
+        .flatten()
+        .filter(|s| !s.is_nan())
+        .reduce(f64::min)
+        .map(|s| s.max(0.0))
+}
+
+/// The progress line: elapsed time, the target's error → its goal and when the run
+/// should end first (what a narrow terminal cuts is the rest: photons, ray rate).
+fn progress_line(state: &RunState<'_>) -> String {
+    let error = state.history.last().map_or(f64::NAN, |p| p.rel_error);
+    let unit = if state.options.absolute { "" } else { " %" };
+    let scale = if state.options.absolute { 1.0 } else { 100.0 };
+    let goal = state
+        .options
+        .target_error
+        .map(|g| format!(" → {:.3}{unit}", g * scale))
+        .unwrap_or_default();
+    let eta = match (state.stop_reason, remaining_s(state)) {
+        (Some(reason), _) => format!(", stopped on {}", reason.as_str()),
+        (None, Some(r)) => format!(", done in ~{r:.1} s"),
+        (None, None) => String::new(),
+    };
+    format!(
+        "{:.1} s  {}: {:.3}{unit}{goal}{eta}  {} photons  {:.1} Mrays/s",
+        state.elapsed_s,
+        state.target.describe(&state.scene.receivers),
+        error * scale,
+        state.tallies.photons,
+        state.tallies.rays as f64 / state.elapsed_s.max(1e-9) / 1e6,
+    )
+}
+
+/// How far the run is, in thousandths, by its nearest stop criterion.
+fn per_mille(state: &RunState<'_>) -> u64 {
+    match remaining_s(state) {
+        Some(r) => (PER_MILLE as f64 * state.elapsed_s / (state.elapsed_s + r).max(1e-9)) as u64,
+        None => 0,
+    }
+}
+
 impl Observer for CliObserver {
     fn epoch(&mut self, state: &RunState<'_>) {
-        if !self.quiet {
-            let p = state.history.last();
-            let error = p.map_or(f64::NAN, |p| p.rel_error);
-            let unit = if state.options.absolute { "" } else { " %" };
-            let scale = if state.options.absolute { 1.0 } else { 100.0 };
-            let goal = state
-                .options
-                .target_error
-                .map(|g| format!(" → {:.3}{unit}", g * scale))
-                .unwrap_or_default();
-            // The accuracy forecast when there is an error target, else the photon count.
-            let photons_rate = state.tallies.photons as f64 / state.elapsed_s.max(1e-9);
-            let remaining_s = match (state.forecast, state.options.photons) {
-                (Some(f), _) => Some(f.total_s - state.elapsed_s),
-                (None, Some(n)) => {
-                    Some(n.saturating_sub(state.tallies.photons) as f64 / photons_rate)
-                }
-                _ => None,
-            };
-            let eta = remaining_s
-                .map(|r| format!(", done in ~{:.1} s", r.max(0.0)))
-                .unwrap_or_default();
-            eprint!(
-                "\r{:7.1} s  {:>12} photons  {:6.1} Mrays/s  {}: {:.3}{unit}{goal}{eta}    ",
-                state.elapsed_s,
-                state.tallies.photons,
-                state.tallies.rays as f64 / state.elapsed_s.max(1e-9) / 1e6,
-                state.target.describe(&state.scene.receivers),
-                error * scale,
-            );
-            let _ = std::io::stderr().flush();
-        }
+        self.progress.set(per_mille(state), || progress_line(state));
         if state.stop_reason.is_none() && self.last_save.elapsed().as_secs_f64() >= SAVE_EVERY_S {
             self.last_save = Instant::now();
             if let Err(e) = save_summary(&self.out, state) {
@@ -612,14 +657,17 @@ fn bench_rays_command(path: &Path, rays: usize, threads: Option<usize>) -> Resul
     }
     let threads =
         threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let spinner = Progress::spinner();
     let table = luxtally::bench::bench_rays(
         &scene.geometry,
         &scene.name,
         rays,
         threads,
         cfg!(feature = "obvhs"),
-    )?;
-    print!("{table}");
+        &|what| spinner.message(format!("bench-rays: {what}")),
+    );
+    spinner.clear();
+    print!("{}", table?);
     Ok(())
 }
 
