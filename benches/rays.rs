@@ -28,7 +28,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ];
     println!("## Ray casting ({threads} threads available)\n");
     for (label, g) in &scenes {
-        print!("{}", bench_rays(g, label, rays, threads, obvhs)?);
+        print!("{}", bench_rays(g, label, rays, threads, obvhs, &|_| {})?);
     }
     Ok(())
 }

@@ -323,13 +323,14 @@ fn rust_mrays(
 
 /// Times every backend and API on `rays` random closest-hit rays and as many shadow
 /// rays over `geometry`, on 1 and on `threads` threads, plus the C reference; returns
-/// a Markdown section.
+/// a Markdown section. `progress` is told each measurement as it starts.
 pub fn bench_rays(
     geometry: &Geometry,
     label: &str,
     rays: usize,
     threads: usize,
     obvhs: bool,
+    progress: &dyn Fn(&str),
 ) -> Result<String> {
     let iterations = 7;
     let (lo, hi) = local_bounds(geometry);
@@ -349,6 +350,7 @@ pub fn bench_rays(
     );
 
     let (rss0, _) = memory_mib();
+    progress("embree: BVH build");
     let start = Instant::now();
     let embree = EmbreeScene::new(geometry)?;
     let embree_build = start.elapsed().as_secs_f64();
@@ -367,6 +369,10 @@ pub fn bench_rays(
     let _ = writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     let (mut best_closest, mut best_occl) = (0.0f64, 0.0f64);
     for api in RayApi::ALL {
+        progress(&format!(
+            "embree {}: closest and occlusion rays",
+            api.name()
+        ));
         // Rust 1 thread, C 1 thread and Rust on the pool take turns, best of each kept,
         // so a busy machine skews them alike.
         let mut m = [0.0f64; 6]; // closest: rust1, rustN, C; occlusion: rust1, rustN, C
@@ -400,6 +406,7 @@ pub fn bench_rays(
     #[cfg(feature = "obvhs")]
     if obvhs {
         let (rss0, _) = memory_mib();
+        progress("obvhs: BVH build");
         let start = Instant::now();
         let bvh = crate::accel::bvh::ObvhsScene::new(geometry);
         let build = start.elapsed().as_secs_f64();
@@ -409,6 +416,7 @@ pub fn bench_rays(
             rss1 - rss0
         ));
         let api = RayApi::Single;
+        progress("obvhs: closest and occlusion rays");
         let c1 = rust_mrays(&bvh, api, &closest_chunks, false, None, iterations);
         let cn = rust_mrays(&bvh, api, &closest_chunks, false, Some(&pool), iterations);
         let o1 = rust_mrays(&bvh, api, &shadow_chunks, true, None, iterations);
@@ -462,11 +470,13 @@ pub fn lit_scene(name: &str, mut geometry: Geometry) -> crate::scene::Scene {
 /// closest-hit rays per second of the photon pass (track estimator, so every ray is a
 /// closest-hit ray) over the backend's rays per second on incoherent random rays through
 /// the same API, both wall time on 1 and on `threads` threads. Returns a Markdown table.
+/// `progress` is told each measurement as it starts.
 pub fn bench_photons(
     scene: &crate::scene::Scene,
     photons: u64,
     threads: usize,
     backend: crate::accel::Backend,
+    progress: &dyn Fn(&str),
 ) -> Result<String> {
     use crate::run::{run, RunOptions};
     use crate::scene::Estimator;
@@ -492,6 +502,7 @@ pub fn bench_photons(
             .num_threads(t)
             .build()
             .map_err(|e| Error::Unsupported(format!("cannot start {t} threads: {e}")))?;
+        progress(&format!("raw rays, {t} threads"));
         let raw = rust_mrays(
             caster.as_ref(),
             caster.default_intersect_api(),
@@ -507,6 +518,7 @@ pub fn bench_photons(
             estimator: Some(Estimator::Track),
             ..RunOptions::from_scene(scene)
         };
+        progress(&format!("{photons} photons, {t} threads"));
         let result = run(scene, &options, &AtomicBool::new(false), &mut ())?;
         let traced = result.tallies.rays as f64 / result.elapsed_s / 1e6;
         let _ = writeln!(
@@ -523,7 +535,8 @@ pub fn bench_photons(
 /// quadratic) on `receiver:NAME` or `time_limit_s`, and reports the error-versus-time
 /// history with the forecasts made along the way, the times to 5, 2 and 1 %, the FOM,
 /// the forecast made once 10 % of the photons were traced against what the run needed,
-/// and the share of run time spent on statistics and forecasts.
+/// and the share of run time spent on statistics and forecasts. `progress` is told
+/// when the run starts.
 pub fn bench_accuracy(
     scene: &crate::scene::Scene,
     receiver: &str,
@@ -531,6 +544,7 @@ pub fn bench_accuracy(
     target: f64,
     time_limit_s: f64,
     threads: usize,
+    progress: &dyn Fn(&str),
 ) -> Result<String> {
     use crate::run::{run, RunOptions};
     use std::sync::atomic::AtomicBool;
@@ -545,6 +559,10 @@ pub fn bench_accuracy(
         estimator,
         ..RunOptions::from_scene(scene)
     };
+    progress(&format!(
+        "receiver:{receiver} to {:.1} % (at most {time_limit_s} s)",
+        100.0 * target
+    ));
     let result = run(scene, &options, &AtomicBool::new(false), &mut ())?;
     let state = result.state(scene, &options);
     let summary = crate::output::summary::build(&state);
@@ -597,7 +615,7 @@ pub fn bench_accuracy(
     if let (Some(last), Some(early)) = (
         h.last(),
         h.iter()
-            .find(|p| p.photons * 10 >= h.last().map_or(0, |l| l.photons)),
+            .find(|p| p.photons.saturating_mul(10) >= h.last().map_or(0, |l| l.photons)),
     ) {
         if let (Some(fs), Some(fp)) = (early.forecast_s, early.forecast_photons) {
             let _ = writeln!(

@@ -6,7 +6,8 @@
 //! batches, epochs) → `tally` (receivers and triangle maps) → `stats` (equations of
 //! method.md, forecast, stop criteria) → `output` (summary.json and files) → `render`
 //! (the eye pass: images from a camera). `photometry` reads luminaires' photometric
-//! files (IES LM-63, EULUMDAT) for the scene's lights.
+//! files (IES LM-63, EULUMDAT) for the scene's lights; `limits` sizes a run from all of
+//! them before it allocates.
 
 // `!(x > 0.0)` is deliberate throughout: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -14,6 +15,7 @@
 pub mod accel;
 pub mod bench;
 pub mod error;
+pub mod limits;
 pub mod output;
 pub mod photometry;
 pub mod render;

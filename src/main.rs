@@ -1,13 +1,16 @@
 //! The `luxtally` command line: parses, calls the library, prints one line on error.
 
+mod progress;
+
 use clap::{Parser, Subcommand};
 use luxtally::accel::{self, Backend, RayCaster};
+use luxtally::limits;
 use luxtally::output::{summary, write_atomic};
 use luxtally::render::{self, IndirectMap, MAP_FILE};
 use luxtally::run::{run_with, Observer, RunOptions, RunResult, RunState};
 use luxtally::scene::{Estimator, LightKind, Scene};
 use luxtally::{Error, Result};
-use std::io::Write;
+use progress::Progress;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -131,6 +134,10 @@ struct RunArgs {
     /// Rewrite report.html every SECONDS during the run (the page reloads itself).
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     report_every: Option<f64>,
+    /// Refuse to start when the run is estimated to need more memory than SIZE (512M,
+    /// 8G, 8GiB or bytes; default: the memory available now).
+    #[arg(long, value_name = "SIZE")]
+    max_memory: Option<String>,
 }
 
 #[derive(clap::Args)]
@@ -195,13 +202,16 @@ fn main() -> ExitCode {
             } else {
                 luxtally::scene::load(&scene)?
             };
+            let spinner = Progress::spinner();
             let table = luxtally::bench::bench_photons(
                 &scene,
                 photons,
                 threads.unwrap_or_else(all_cores),
                 backend.parse()?,
-            )?;
-            print!("{table}");
+                &|what| spinner.message(format!("bench-photons: {what}")),
+            );
+            spinner.clear();
+            print!("{}", table?);
             Ok(())
         })(),
         Command::BenchAccuracy {
@@ -224,6 +234,7 @@ fn main() -> ExitCode {
                     }
                 };
             let estimator = estimator.as_deref().map(parse_estimator).transpose()?;
+            let spinner = Progress::spinner();
             let report = luxtally::bench::bench_accuracy(
                 &scene,
                 &receiver,
@@ -231,8 +242,10 @@ fn main() -> ExitCode {
                 target_error,
                 time_limit,
                 threads.unwrap_or_else(all_cores),
-            )?;
-            print!("{report}");
+                &|what| spinner.message(format!("bench-accuracy: {what}")),
+            );
+            spinner.clear();
+            print!("{}", report?);
             Ok(())
         })(),
     };
@@ -295,11 +308,42 @@ fn run_options(args: &RunArgs, scene: &Scene) -> Result<RunOptions> {
     Ok(options)
 }
 
-/// `--out`, or `out/<scene name>/`, created.
-fn out_dir(out: Option<&Path>, scene: &Scene) -> Result<PathBuf> {
-    let out = out.map_or_else(|| Path::new("out").join(&scene.name), Path::to_path_buf);
-    std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
-    Ok(out)
+/// `--out`, or `out/<scene name>/`, created (after the checks that can refuse a run).
+fn out_dir(out: Option<&Path>, scene: &Scene) -> Result<OutDir> {
+    let path = out.map_or_else(|| Path::new("out").join(&scene.name), Path::to_path_buf);
+    let created = !path.exists();
+    std::fs::create_dir_all(&path).map_err(|e| Error::io(&path, e))?;
+    Ok(OutDir { path, created })
+}
+
+/// An output folder, and whether this command created it.
+struct OutDir {
+    path: PathBuf,
+    created: bool,
+}
+
+impl OutDir {
+    /// `result`, after removing the folder if the command created it, failed and left
+    /// it empty (a failed run leaves no empty output folder behind).
+    fn keep_on<T>(&self, result: Result<T>) -> Result<T> {
+        if result.is_err() && self.created {
+            // Fails, as it should, when the folder is not empty.
+            let _ = std::fs::remove_dir(&self.path);
+        }
+        result
+    }
+}
+
+/// The memory budget of `run` and `render` (`--max-memory`, else the memory available),
+/// checked against the scene file's built-in shapes before the loader tessellates them.
+fn budget_for(args: &RunArgs) -> Result<limits::Budget> {
+    let budget = limits::Budget::new(args.max_memory.as_deref())?;
+    let backend = match &args.backend {
+        Some(b) => b.parse::<Backend>()?,
+        None => Backend::default(),
+    };
+    limits::check_scene_file(&args.scene, backend, &budget)?;
+    Ok(budget)
 }
 
 /// The photon pass shared by `run` and `render`: runs with all stop criteria and writes
@@ -323,7 +367,7 @@ fn photon_pass(
         });
     }
     let mut observer = CliObserver {
-        quiet: args.quiet,
+        progress: Progress::new(args.quiet, PER_MILLE, progress::RUN_TEMPLATE),
         out: out.to_path_buf(),
         last_save: Instant::now(),
         save_error: None,
@@ -331,10 +375,11 @@ fn photon_pass(
         last_report: None,
     };
     let result = run_with(scene, options, caster, setup, &interrupt, &mut observer)?;
-    if !args.quiet {
-        eprintln!();
-    }
     let state = result.state(scene, options);
+    let interrupted = result.stop_reason == luxtally::stats::stop::StopReason::Interrupted;
+    observer
+        .progress
+        .finish(!interrupted, progress_line(&state));
     save_summary(out, &state)?;
     luxtally::output::write_run_files(out, &state)?;
     if let Some(e) = observer.save_error {
@@ -346,18 +391,26 @@ fn photon_pass(
 }
 
 fn run_command(args: RunArgs) -> Result<()> {
+    let budget = budget_for(&args)?;
     let scene = luxtally::scene::load(&args.scene)?;
     let options = run_options(&args, &scene)?;
-    let out = out_dir(args.out.as_deref(), &scene)?;
+    limits::check_run(&scene, &options, None, true, &budget)?;
+    let dir = out_dir(args.out.as_deref(), &scene)?;
+    dir.keep_on(run_into(&args, &scene, &options, &dir.path))
+}
+
+/// `run` once its output folder exists.
+fn run_into(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> Result<()> {
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
-    let result = photon_pass(&args, &scene, &options, caster.as_ref(), setup, &out)?;
-    print_run(&args, &result.state(&scene, &options), &out);
+    let result = photon_pass(args, scene, options, caster.as_ref(), setup, out)?;
+    print_run(args, &result.state(scene, options), out);
     Ok(())
 }
 
 /// `render`: the photon pass (or a saved map with --from), then the eye pass.
 fn render_command(args: RenderArgs) -> Result<()> {
+    let budget = budget_for(&args.run)?;
     let mut scene = luxtally::scene::load(&args.run.scene)?;
     let options = run_options(&args.run, &scene)?;
     // Checked before the photon pass, which may be long.
@@ -366,26 +419,57 @@ fn render_command(args: RenderArgs) -> Result<()> {
         camera.interpolate = false;
     }
     scene.camera = Some(camera.clone());
-    let out = out_dir(args.run.out.as_deref().or(args.from.as_deref()), &scene)?;
+    limits::check_run(
+        &scene,
+        &options,
+        Some(&camera),
+        args.from.is_none(),
+        &budget,
+    )?;
+    let dir = out_dir(args.run.out.as_deref().or(args.from.as_deref()), &scene)?;
+    dir.keep_on(render_into(&args, &scene, &options, &camera, &dir.path))
+}
+
+/// `render` once its output folder exists: the photon pass (or the saved map), then
+/// the image.
+fn render_into(
+    args: &RenderArgs,
+    scene: &Scene,
+    options: &RunOptions,
+    camera: &luxtally::scene::Camera,
+    out: &Path,
+) -> Result<()> {
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
     let map = match &args.from {
-        Some(dir) => IndirectMap::load(&dir.join(MAP_FILE), &scene)?,
+        Some(dir) => IndirectMap::load(&dir.join(MAP_FILE), scene)?,
         None => {
-            let result = photon_pass(&args.run, &scene, &options, caster.as_ref(), setup, &out)?;
-            print_run(&args.run, &result.state(&scene, &options), &out);
-            IndirectMap::from_tallies(&scene, &result.tallies, result.setup.total_flux_lm)
+            let result = photon_pass(&args.run, scene, options, caster.as_ref(), setup, out)?;
+            print_run(&args.run, &result.state(scene, options), out);
+            IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
         }
     };
-    let r = render::render(
-        &scene,
-        &camera,
+    let pixels = camera.resolution.map(u64::from).iter().product::<u64>();
+    let progress = Progress::new(args.run.quiet, pixels, progress::RENDER_TEMPLATE);
+    let start = Instant::now();
+    let line = |done: u64| {
+        format!(
+            "render: {:.0} % of {pixels} pixels in {:.1} s",
+            100.0 * done as f64 / pixels as f64,
+            start.elapsed().as_secs_f64()
+        )
+    };
+    let r = render::render_with(
+        scene,
+        camera,
         &map,
         caster.as_ref(),
         options.seed,
         options.threads,
+        &|n| progress.inc(n as u64, line),
     )?;
-    render::output::write_all(&r.image, &out)?;
+    progress.finish(true, line(pixels));
+    render::output::write_all(&r.image, out)?;
     if !args.run.quiet {
         println!(
             "render: {}×{} px, {} samples/px, {} eye rays + {} shadow rays in {:.2} s \
@@ -451,10 +535,10 @@ fn save_summary(out: &Path, state: &RunState<'_>) -> Result<()> {
     write_atomic(&out.join("summary.json"), &json)
 }
 
-/// Progress line on stderr and a summary.json saved every few seconds, so a long run
-/// never loses the work already done.
+/// Progress on stderr and a summary.json saved every few seconds, so a long run never
+/// loses the work already done.
 struct CliObserver {
-    quiet: bool,
+    progress: Progress,
     out: PathBuf,
     last_save: Instant,
     save_error: Option<Error>,
@@ -465,40 +549,64 @@ struct CliObserver {
 
 const SAVE_EVERY_S: f64 = 10.0;
 
+/// A run's progress bar counts thousandths of the run.
+const PER_MILLE: u64 = 1000;
+
+/// Seconds until the run's first stop criterion is met, as far as they can be told: the
+/// accuracy forecast, the photons left at the current rate, the time limit.
+fn remaining_s(state: &RunState<'_>) -> Option<f64> {
+    let rate = state.tallies.photons as f64 / state.elapsed_s.max(1e-9);
+    let by_forecast = state.forecast.map(|f| f.total_s - state.elapsed_s);
+    let by_photons = state
+        .options
+        .photons
+        .map(|n| n.saturating_sub(state.tallies.photons) as f64 / rate);
+    let by_time = state.options.time_limit_s.map(|t| t - state.elapsed_s);
+    [by_forecast, by_photons, by_time]
+        .into_iter()
+        .flatten()
+        .filter(|s| !s.is_nan())
+        .reduce(f64::min)
+        .map(|s| s.max(0.0))
+}
+
+/// The progress line: elapsed time, the target's error → its goal and when the run
+/// should end first (what a narrow terminal cuts is the rest: photons, ray rate).
+fn progress_line(state: &RunState<'_>) -> String {
+    let error = state.history.last().map_or(f64::NAN, |p| p.rel_error);
+    let unit = if state.options.absolute { "" } else { " %" };
+    let scale = if state.options.absolute { 1.0 } else { 100.0 };
+    let goal = state
+        .options
+        .target_error
+        .map(|g| format!(" → {:.3}{unit}", g * scale))
+        .unwrap_or_default();
+    let eta = match (state.stop_reason, remaining_s(state)) {
+        (Some(reason), _) => format!(", stopped on {}", reason.as_str()),
+        (None, Some(r)) => format!(", done in ~{r:.1} s"),
+        (None, None) => String::new(),
+    };
+    format!(
+        "{:.1} s  {}: {:.3}{unit}{goal}{eta}  {} photons  {:.1} Mrays/s",
+        state.elapsed_s,
+        state.target.describe(&state.scene.receivers),
+        error * scale,
+        state.tallies.photons,
+        state.tallies.rays as f64 / state.elapsed_s.max(1e-9) / 1e6,
+    )
+}
+
+/// How far the run is, in thousandths, by its nearest stop criterion.
+fn per_mille(state: &RunState<'_>) -> u64 {
+    match remaining_s(state) {
+        Some(r) => (PER_MILLE as f64 * state.elapsed_s / (state.elapsed_s + r).max(1e-9)) as u64,
+        None => 0,
+    }
+}
+
 impl Observer for CliObserver {
     fn epoch(&mut self, state: &RunState<'_>) {
-        if !self.quiet {
-            let p = state.history.last();
-            let error = p.map_or(f64::NAN, |p| p.rel_error);
-            let unit = if state.options.absolute { "" } else { " %" };
-            let scale = if state.options.absolute { 1.0 } else { 100.0 };
-            let goal = state
-                .options
-                .target_error
-                .map(|g| format!(" → {:.3}{unit}", g * scale))
-                .unwrap_or_default();
-            // The accuracy forecast when there is an error target, else the photon count.
-            let photons_rate = state.tallies.photons as f64 / state.elapsed_s.max(1e-9);
-            let remaining_s = match (state.forecast, state.options.photons) {
-                (Some(f), _) => Some(f.total_s - state.elapsed_s),
-                (None, Some(n)) => {
-                    Some(n.saturating_sub(state.tallies.photons) as f64 / photons_rate)
-                }
-                _ => None,
-            };
-            let eta = remaining_s
-                .map(|r| format!(", done in ~{:.1} s", r.max(0.0)))
-                .unwrap_or_default();
-            eprint!(
-                "\r{:7.1} s  {:>12} photons  {:6.1} Mrays/s  {}: {:.3}{unit}{goal}{eta}    ",
-                state.elapsed_s,
-                state.tallies.photons,
-                state.tallies.rays as f64 / state.elapsed_s.max(1e-9) / 1e6,
-                state.target.describe(&state.scene.receivers),
-                error * scale,
-            );
-            let _ = std::io::stderr().flush();
-        }
+        self.progress.set(per_mille(state), || progress_line(state));
         if state.stop_reason.is_none() && self.last_save.elapsed().as_secs_f64() >= SAVE_EVERY_S {
             self.last_save = Instant::now();
             if let Err(e) = save_summary(&self.out, state) {
@@ -606,14 +714,17 @@ fn bench_rays_command(path: &Path, rays: usize, threads: Option<usize>) -> Resul
     }
     let threads =
         threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let spinner = Progress::spinner();
     let table = luxtally::bench::bench_rays(
         &scene.geometry,
         &scene.name,
         rays,
         threads,
         cfg!(feature = "obvhs"),
-    )?;
-    print!("{table}");
+        &|what| spinner.message(format!("bench-rays: {what}")),
+    );
+    spinner.clear();
+    print!("{}", table?);
     Ok(())
 }
 

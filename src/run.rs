@@ -156,6 +156,7 @@ pub fn run_with(
     interrupt: &AtomicBool,
     observer: &mut dyn Observer,
 ) -> Result<RunResult> {
+    crate::limits::validate(scene, options)?;
     let target = match &options.target {
         Some(t) => Target::parse(t, &scene.receivers)?,
         None if scene.receivers.is_empty() => Target::Global,

@@ -64,6 +64,20 @@ pub fn render(
     seed: u64,
     threads: usize,
 ) -> Result<Render> {
+    render_with(scene, camera, map, caster, seed, threads, &|_| {})
+}
+
+/// [`render`], calling `on_tile(pixels)` from the worker threads as each tile is done
+/// (a progress display).
+pub fn render_with(
+    scene: &Scene,
+    camera: &Camera,
+    map: &IndirectMap,
+    caster: &dyn RayCaster,
+    seed: u64,
+    threads: usize,
+    on_tile: &(dyn Fn(usize) + Sync),
+) -> Result<Render> {
     if map.face_lx.len() != scene.geometry.triangle_count() {
         return Err(Error::input(
             scene.path.display().to_string(),
@@ -86,7 +100,9 @@ pub fn render(
         tiles
             .par_iter()
             .map_init(Scratch::default, |s, &(first, n)| {
-                pass.render_tile(first, n, s)
+                let tile = pass.render_tile(first, n, s);
+                on_tile(n);
+                tile
             })
             .collect()
     });

@@ -406,11 +406,16 @@ fn builtin_shape(o: &ObjectFile, shape: &str, at: &str) -> Result<Mesh> {
                     format!("must be > 0, got {radius}"),
                 ));
             }
-            let subdivisions = o.subdivisions.unwrap_or(3);
-            if subdivisions > 8 {
+            let subdivisions = o
+                .subdivisions
+                .unwrap_or(shapes::DEFAULT_SPHERE_SUBDIVISIONS);
+            if subdivisions > shapes::MAX_SPHERE_SUBDIVISIONS {
                 return Err(Error::input(
                     format!("{at}.subdivisions"),
-                    format!("must be in 0..=8, got {subdivisions}"),
+                    format!(
+                        "must be in 0..={}, got {subdivisions}",
+                        shapes::MAX_SPHERE_SUBDIVISIONS
+                    ),
                 ));
             }
             Ok(shapes::make_sphere(center, radius, subdivisions))

@@ -50,6 +50,25 @@ pub fn make_rect(corner: DVec3, u: DVec3, v: DVec3) -> Mesh {
     }
 }
 
+/// Sphere subdivisions when the scene file gives none, and the most it may give
+/// (8: 1.3 M triangles per sphere).
+pub const DEFAULT_SPHERE_SUBDIVISIONS: u32 = 3;
+pub const MAX_SPHERE_SUBDIVISIONS: u32 = 8;
+
+/// Triangles a built-in shape makes, known before it is built (so a scene can be sized
+/// before it is tessellated); `None` for an unknown shape or subdivisions out of range.
+pub fn triangle_count(shape: &str, subdivisions: Option<u32>) -> Option<u64> {
+    match shape {
+        "box" => Some(12),
+        "rect" => Some(2),
+        "sphere" => {
+            let s = subdivisions.unwrap_or(DEFAULT_SPHERE_SUBDIVISIONS);
+            (s <= MAX_SPHERE_SUBDIVISIONS).then(|| 20 << (2 * s))
+        }
+        _ => None,
+    }
+}
+
 /// Icosphere: an icosahedron whose faces are split in four `subdivisions` times, vertices
 /// projected onto the sphere, shared between faces, normals outward.
 pub fn make_sphere(center: DVec3, radius: f64, subdivisions: u32) -> Mesh {
@@ -153,5 +172,40 @@ impl Transform {
         for p in vertices {
             *p = rotation * (*p * self.scale) + self.translate;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangle_counts_match_the_shapes_built() {
+        let (o, x) = (DVec3::ZERO, DVec3::X);
+        assert_eq!(
+            triangle_count("box", None),
+            Some(make_box(o, DVec3::ONE).triangles.len() as u64)
+        );
+        assert_eq!(
+            triangle_count("rect", None),
+            Some(make_rect(o, x, DVec3::Y).triangles.len() as u64)
+        );
+        for s in 0..=4 {
+            let built = make_sphere(o, 1.0, s).triangles.len() as u64;
+            assert_eq!(triangle_count("sphere", Some(s)), Some(built));
+        }
+        assert_eq!(
+            triangle_count("sphere", None),
+            Some(
+                make_sphere(o, 1.0, DEFAULT_SPHERE_SUBDIVISIONS)
+                    .triangles
+                    .len() as u64
+            )
+        );
+        assert_eq!(
+            triangle_count("sphere", Some(MAX_SPHERE_SUBDIVISIONS + 1)),
+            None
+        );
+        assert_eq!(triangle_count("torus", None), None);
     }
 }

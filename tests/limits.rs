@@ -1,0 +1,267 @@
+//! Limits that fail cleanly: runs and renders that would not fit in memory, or whose
+//! numbers would overflow the engine's indices, stop before allocating with one line
+//! naming the part at fault and its figure, exit 1, no panic and no output folder.
+
+use luxtally::accel::Backend;
+use luxtally::limits::{self, Budget};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn luxtally(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_luxtally"))
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+/// A fresh, empty temp directory for one test.
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("luxtally-limits-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The office scene with `from` replaced by `to`, written into `dir`.
+fn office_with(dir: &Path, from: &str, to: &str) -> PathBuf {
+    let text = std::fs::read_to_string("scenes/office.toml").unwrap();
+    assert!(text.contains(from), "office.toml has no `{from}`");
+    let path = dir.join("scene.toml");
+    std::fs::write(&path, text.replace(from, to)).unwrap();
+    path
+}
+
+/// `n` spheres of `subdivisions`, a material and a light.
+fn spheres(dir: &Path, n: usize, subdivisions: u32) -> PathBuf {
+    let mut text = String::from("[materials.m]\nreflectance = 0.5\n");
+    for i in 0..n {
+        text += &format!(
+            "[[objects]]\nshape = \"sphere\"\ncenter = [{}, 0, 0]\nradius = 1\nsubdivisions = {subdivisions}\nmaterial = \"m\"\n",
+            3 * i
+        );
+    }
+    text += "[[lights]]\ntype = \"point\"\nposition = [0, 0, 5]\nintensity_cd = 100\n";
+    let path = dir.join("spheres.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Exit 1, exactly one stderr line `luxtally: …` holding every needle, no panic, and no
+/// output folder at `out`.
+fn assert_refused(output: &Output, needles: &[&str], out: &Path) -> String {
+    let err = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert_eq!(output.status.code(), Some(1), "exit code; stderr: {err}");
+    assert_eq!(err.lines().count(), 1, "one line: {err}");
+    assert!(err.starts_with("luxtally: "), "{err}");
+    assert!(
+        !err.contains("panicked") && !err.contains("RUST_BACKTRACE"),
+        "{err}"
+    );
+    for n in needles {
+        assert!(err.contains(n), "`{n}` missing from: {err}");
+    }
+    assert!(!out.exists(), "output folder {} left behind", out.display());
+    err
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn receiver_of_ten_billion_cells_is_refused_before_allocating() {
+    let dir = temp_dir("cells-1e10");
+    let scene = office_with(&dir, "cells = [64, 32]", "cells = [100000, 100000]");
+    let out = dir.join("out");
+    // Refused by memory (4.2 TB) or, where the memory available is unknown, because
+    // 10^10 cells do not fit the 32-bit cell numbers.
+    assert_refused(
+        &luxtally(&["run", s(&scene), "--out", s(&out)]),
+        &["receivers", "100000"],
+        &out,
+    );
+    // With memory to spare, the cell numbers still refuse it.
+    assert_refused(
+        &luxtally(&["run", s(&scene), "--out", s(&out), "--max-memory", "100T"]),
+        &["receivers: 10000000000 cells in all; at most 4294967295"],
+        &out,
+    );
+}
+
+#[test]
+fn receiver_of_four_hundred_million_cells_names_its_figure_and_leaves_no_folder() {
+    let dir = temp_dir("cells-4e8");
+    let scene = office_with(&dir, "cells = [64, 32]", "cells = [20000, 20000]");
+    let out = dir.join("out");
+    let mut args = vec!["run", s(&scene), "--out", s(&out)];
+    // Its tallies alone are 35 GB: on a machine with room for them, ask for less.
+    if limits::available_bytes().is_none_or(|b| b > 100_000_000_000) {
+        args.extend(["--max-memory", "16G"]);
+    }
+    let err = assert_refused(
+        &luxtally(&args),
+        &[
+            "receivers[0] \"desk\": 20000 × 20000 cells need",
+            " GB of tallies",
+        ],
+        &out,
+    );
+    assert!(
+        err.contains(" available (--max-memory to change)")
+            || err.contains("allowed by --max-memory"),
+        "{err}"
+    );
+}
+
+#[test]
+fn max_memory_refuses_the_office_with_its_figure_and_a_gigabyte_runs_it() {
+    let dir = temp_dir("office");
+    let out = dir.join("out");
+    let scene = "scenes/office.toml";
+    assert_refused(
+        &luxtally(&["run", scene, "--out", s(&out), "--max-memory", "2M"]),
+        &[scene, " need ", " MB ", "; 2.0 MB allowed by --max-memory"],
+        &out,
+    );
+    let ok = luxtally(&[
+        "run",
+        scene,
+        "--out",
+        s(&out),
+        "--max-memory",
+        "1GiB",
+        "--photons",
+        "20000",
+        "--quiet",
+    ]);
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    assert!(out.join("summary.json").exists());
+}
+
+#[test]
+fn unreadable_sizes_and_thread_counts_are_one_line_errors() {
+    let dir = temp_dir("bad-args");
+    let out = dir.join("out");
+    for (args, needle) in [
+        (
+            vec!["--max-memory", "8X"],
+            "--max-memory: `8X` is not a size",
+        ),
+        (
+            vec!["--max-memory", "0"],
+            "--max-memory: `0` is not more than 0 bytes",
+        ),
+        (
+            vec!["--threads", "100000"],
+            "--threads: 100000 is more than 1024",
+        ),
+    ] {
+        let mut all = vec!["run", "scenes/office.toml", "--out", s(&out)];
+        all.extend(args);
+        assert_refused(&luxtally(&all), &[needle], &out);
+    }
+}
+
+#[test]
+fn absurd_photon_count_with_a_time_limit_runs_to_the_time_limit() {
+    let dir = temp_dir("photons");
+    let out = dir.join("out");
+    let result = luxtally(&[
+        "run",
+        "scenes/office.toml",
+        "--photons",
+        &u64::MAX.to_string(),
+        "--time-limit",
+        "0.5",
+        "--quiet",
+        "--out",
+        s(&out),
+    ]);
+    let err = String::from_utf8_lossy(&result.stderr);
+    assert!(result.status.success(), "{err}");
+    assert!(err.is_empty(), "{err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["stop_reason"], "time");
+    let photons = summary["photons_emitted"].as_u64().unwrap();
+    assert!(photons > 0 && photons < u64::MAX);
+}
+
+#[test]
+fn absurd_camera_is_refused_before_the_photon_pass() {
+    let dir = temp_dir("camera");
+    let text = std::fs::read_to_string("scenes/office.toml")
+        .unwrap()
+        .replace("resolution = [640, 480]", "resolution = [16384, 16384]")
+        .replace("samples = 4", "samples = 65536");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    // 6.4 GB of image and 3 GB of ray buffers per thread: refused under 4 GB whatever
+    // the machine (without the limit, a machine with the memory would start it).
+    assert_refused(
+        &luxtally(&["render", s(&scene), "--out", s(&out), "--max-memory", "4G"]),
+        &["camera: ", " need ", "allowed by --max-memory"],
+        &out,
+    );
+}
+
+#[test]
+fn scene_of_many_fine_spheres_is_refused_before_it_is_tessellated() {
+    let dir = temp_dir("spheres");
+    let out = dir.join("out");
+    // 16 spheres of 1.3 M triangles: 21 M triangles, 2.6 GB of geometry and BVH.
+    let scene = spheres(&dir, 16, 8);
+    for command in ["run", "render"] {
+        assert_refused(
+            &luxtally(&[command, s(&scene), "--out", s(&out), "--max-memory", "256M"]),
+            &[
+                "objects: 20971520 triangles need",
+                "of geometry and embree BVH",
+            ],
+            &out,
+        );
+    }
+    // 1000 of them (1.3 G triangles) are refused from the file alone, without building
+    // a single one.
+    let many = spheres(&dir, 1000, 8);
+    let budget = Budget::new(Some("64G")).unwrap();
+    let err = limits::check_scene_file(&many, Backend::Embree, &budget)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("objects: 1310720000 triangles need"), "{err}");
+}
+
+#[test]
+fn a_run_that_fails_after_creating_its_folder_removes_it() {
+    let dir = temp_dir("late-failure");
+    let out = dir.join("out");
+    assert_refused(
+        &luxtally(&[
+            "run",
+            "scenes/office.toml",
+            "--target",
+            "receiver:nope",
+            "--out",
+            s(&out),
+        ]),
+        &["nope"],
+        &out,
+    );
+    // A folder that existed before is left alone.
+    std::fs::create_dir_all(&out).unwrap();
+    let again = luxtally(&[
+        "run",
+        "scenes/office.toml",
+        "--target",
+        "receiver:nope",
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(again.status.code(), Some(1));
+    assert!(out.exists());
+}
