@@ -509,3 +509,163 @@ fn assert_estimators_agree(
     );
     assert!((0.8..=1.25).contains(&r), "{receiver}: z RMS {r}");
 }
+
+// ---- The eye pass ----
+
+use luxtally::accel;
+use luxtally::render::{self, IndirectMap, Render};
+use luxtally::scene::{Camera, Scene};
+
+fn render_zero_map(scene: &Scene) -> Render {
+    let caster = accel::build(Backend::Embree, &scene.geometry).expect("backend builds");
+    let camera = scene.camera.as_ref().expect("test scene has a camera");
+    let map = IndirectMap::zero(scene.geometry.triangle_count());
+    render::render(scene, camera, &map, caster.as_ref(), 1, 2).expect("renders")
+}
+
+/// World ray through the centre of pixel (x, y) (the pinhole of docs/render.md).
+fn pixel_ray(c: &Camera, x: usize, y: usize) -> (DVec3, DVec3) {
+    let [w, h] = c.resolution.map(|v| v as f64);
+    let forward = (c.look_at - c.position).normalize();
+    let right = forward.cross(c.up).normalize();
+    let up = right.cross(forward);
+    let t = (0.5 * c.fov_deg.to_radians()).tan();
+    let sx = (2.0 * (x as f64 + 0.5) / w - 1.0) * t * w / h;
+    let sy = (1.0 - 2.0 * (y as f64 + 0.5) / h) * t;
+    (c.position, (forward + right * sx + up * sy).normalize())
+}
+
+/// Where a ray meets the plane z = 0 (t > 0).
+fn floor_point(o: DVec3, d: DVec3) -> Option<DVec3> {
+    let t = -o.z / d.z;
+    (t > 0.0).then(|| o + d * t)
+}
+
+#[test]
+fn glossy_floor_shows_bsdf_times_illuminance() {
+    // A lone glossy floor: the camera sees f(wo, ω_light)·E at every floor pixel, with
+    // the highlight where the light's mirror direction meets the eye.
+    let s = common::scene(
+        r#"
+        [materials.floor]
+        reflectance = 0.1
+        glossy_reflectance = 0.7
+        roughness = 0.4
+        [[objects]]
+        shape = "rect"
+        corner = [-5, -5, 0]
+        u = [10, 0, 0]
+        v = [0, 10, 0]
+        material = "floor"
+        [[lights]]
+        type = "point"
+        position = [0.5, 1.0, 2]
+        intensity_cd = 150
+        [camera]
+        position = [0, -4, 3]
+        look_at = [0, 0, 0]
+        fov_deg = 50
+        resolution = [48, 36]
+        "#,
+    );
+    let r = render_zero_map(&s);
+    let c = s.camera.as_ref().unwrap();
+    let b = Bsdf::new(&s.materials[0]);
+    let light = DVec3::new(0.5, 1.0, 2.0);
+    let (mut checked, mut peak) = (0, 0.0f64);
+    for y in 0..r.image.height {
+        for x in 0..r.image.width {
+            let (o, d) = pixel_ray(c, x, y);
+            let got = r.image.luminance_cdm2[y * r.image.width + x];
+            let Some(p) = floor_point(o, d).filter(|p| p.x.abs() < 5.0 && p.y.abs() < 5.0) else {
+                assert_eq!(got, 0.0);
+                continue;
+            };
+            let to = light - p;
+            let r2 = to.length_squared();
+            let wi = to / r2.sqrt();
+            let want = b.f(-d, wi, DVec3::Z) * 150.0 * wi.z / r2;
+            assert!(
+                (got / want - 1.0).abs() < 1e-3,
+                "pixel ({x}, {y}): {got} cd/m² against {want}"
+            );
+            peak = peak.max(got / (0.1 / PI * 150.0 * wi.z / r2));
+            checked += 1;
+        }
+    }
+    assert!(checked > 1000, "{checked} floor pixels");
+    assert!(peak > 3.0, "a highlight shows: {peak}× the diffuse part");
+}
+
+#[test]
+fn nearly_smooth_glossy_wall_shows_the_floor_like_a_mirror() {
+    // tests/render.rs's mirror scene with the mirror made glossy of roughness 0.001: the
+    // eye path continues through the sampled lobe with weight 0.8·G₂/G₁ ≈ 0.8.
+    let s = common::scene(
+        r#"
+        [materials.floor]
+        reflectance = 0.5
+        [materials.mirror]
+        glossy_reflectance = 0.8
+        roughness = 0.001
+        [[objects]]
+        shape = "rect"
+        corner = [-5, -5, 0]
+        u = [7, 0, 0]
+        v = [0, 10, 0]
+        material = "floor"
+        [[objects]]
+        shape = "rect"
+        corner = [2, -3, 0]
+        u = [0, 6, 0]
+        v = [0, 0, 3]
+        material = "mirror"
+        [[lights]]
+        type = "point"
+        position = [0, 0.4, 2]
+        intensity_cd = 100
+        [camera]
+        position = [-2, 0, 1.5]
+        look_at = [2, 0, 0.6]
+        fov_deg = 40
+        resolution = [40, 30]
+        "#,
+    );
+    let r = render_zero_map(&s);
+    let c = s.camera.as_ref().unwrap();
+    let light = DVec3::new(0.0, 0.4, 2.0);
+    let lambert = |p: DVec3| {
+        let to = light - p;
+        let r2 = to.length_squared();
+        0.5 * 100.0 * (to.z / r2.sqrt()) / (PI * r2)
+    };
+    let mut in_mirror = 0;
+    for y in 0..r.image.height {
+        for x in 0..r.image.width {
+            let (o, d) = pixel_ray(c, x, y);
+            let got = r.image.luminance_cdm2[y * r.image.width + x];
+            let t_mirror = (2.0 - o.x) / d.x;
+            let m = o + d * t_mirror;
+            let on_mirror = m.y.abs() < 3.0 && m.z > 0.0 && m.z < 3.0;
+            let t_floor = -o.z / d.z;
+            if !on_mirror || (t_floor > 0.0 && t_floor < t_mirror) {
+                continue;
+            }
+            if (m.y.abs() - 3.0).abs() < 0.05 || m.z.abs() < 0.05 {
+                continue;
+            }
+            let reflected = DVec3::new(-d.x, d.y, d.z);
+            let Some(p) = floor_point(m, reflected).filter(|p| p.x > -5.0 && p.y.abs() < 5.0)
+            else {
+                continue;
+            };
+            let want = 0.8 * lambert(p);
+            assert!(
+                (got / want - 1.0).abs() < 1e-3,
+                "pixel ({x}, {y}): {got} cd/m² against {want}"
+            );
+            in_mirror += 1;
+        }
+    }
+    assert!(in_mirror > 200, "{in_mirror} mirror pixels");
+}
