@@ -741,3 +741,98 @@ fn glossy_floor_under_an_area_source_counts_it_once() {
     assert!(n > 50, "{n} pixels");
     assert!(mean_rel.abs() < 0.02, "mean relative deviation {mean_rel}");
 }
+
+// ---- Mesh files' materials ----
+
+use luxtally::scene::mesh_io::{gltf_to_material, mtl_to_material};
+
+#[test]
+fn mtl_ks_ns_map_to_glossy_reflectance_and_roughness() {
+    // No Ks: Lambertian as before.
+    assert_eq!(
+        mtl_to_material([0.5; 3], None, Some(100.0)),
+        (0.5, 0.0, 1.0)
+    );
+    assert_eq!(
+        mtl_to_material([0.5; 3], Some([0.0; 3]), None),
+        (0.5, 0.0, 1.0)
+    );
+    // Ks 0.5, Ns 198: α = √(2/200) = 0.1, roughness √0.1; the diffuse part keeps 1 − k_s.
+    let (rho, g, r) = mtl_to_material([0.8; 3], Some([0.5; 3]), Some(198.0));
+    assert!((rho - 0.4).abs() < 1e-12 && (g - 0.5).abs() < 1e-12);
+    assert!((r - 0.1f64.sqrt()).abs() < 1e-12);
+    // Never more than 1, however bright the file's colours.
+    let (rho, g, _) = mtl_to_material([1.0; 3], Some([1.0; 3]), Some(10.0));
+    assert!(rho + g <= 1.0);
+    // A huge exponent is a mirror in effect, never roughness 0.
+    assert_eq!(
+        mtl_to_material([0.2; 3], Some([0.3; 3]), Some(1e14)).2,
+        1e-3
+    );
+}
+
+#[test]
+fn gltf_metallic_roughness_map_to_lobes() {
+    let (rho, g, r) = gltf_to_material([0.5; 3], 0.0, 0.6);
+    assert!((rho - 0.96 * 0.5).abs() < 1e-12 && (g - 0.04).abs() < 1e-12 && r == 0.6);
+    let (rho, g, r) = gltf_to_material([0.9; 3], 1.0, 0.0);
+    assert!(rho == 0.0 && (g - 0.9).abs() < 1e-12 && r == 1e-3);
+    for m in [0.0, 0.3, 1.0] {
+        let (rho, g, _) = gltf_to_material([1.0; 3], m, 0.5);
+        assert!(rho + g <= 1.0 + 1e-12, "metallic {m}: {}", rho + g);
+    }
+}
+
+#[test]
+fn obj_with_ks_and_ns_loads_a_glossy_material() {
+    let dir = std::env::temp_dir().join(format!("luxtally-glossy-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("quad.mtl"),
+        "newmtl satin\nKd 0.6 0.6 0.6\nKs 0.25 0.25 0.25\nNs 48\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("quad.obj"),
+        "mtllib quad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl satin\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    let s = luxtally::scene::load_str("[[objects]]\nfile = \"quad.obj\"\n", &dir, "test.toml")
+        .expect("loads");
+    let m = &s.materials[s.geometry.material[0] as usize];
+    assert!((m.reflectance - 0.6 * 0.75).abs() < 1e-6, "{m:?}");
+    assert!((m.glossy_reflectance - 0.25).abs() < 1e-6);
+    assert!((m.roughness - (2.0f64 / 50.0).sqrt().sqrt()).abs() < 1e-6);
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn bad_glossy_keys_are_one_line_errors_naming_material_and_key() {
+    let err = |toml: &str| {
+        luxtally::scene::load_str(toml, std::path::Path::new("."), "t.toml")
+            .expect_err("rejected")
+            .to_string()
+    };
+    let e =
+        err("[materials.satin]\nreflectance = 0.5\nglossy_reflectance = 0.6\nroughness = 0.3\n");
+    assert!(
+        e.contains("materials.satin") && e.contains("1.1 > 1") && !e.contains('\n'),
+        "{e}"
+    );
+    let e = err("[materials.satin]\nglossy_reflectance = 0.6\n");
+    assert!(
+        e.contains("materials.satin.roughness") && e.contains("required"),
+        "{e}"
+    );
+    for bad in ["0", "1.5", "-0.2"] {
+        let e = err(&format!(
+            "[materials.satin]\nglossy_transmittance = 0.5\nroughness = {bad}\n"
+        ));
+        assert!(
+            e.contains("materials.satin.roughness") && e.contains("(0, 1]"),
+            "{e}"
+        );
+    }
+    let e = err("[materials.satin]\nglossy_reflectance = -0.1\nroughness = 0.5\n");
+    assert!(e.contains("materials.satin.glossy_reflectance"), "{e}");
+}

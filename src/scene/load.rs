@@ -320,7 +320,11 @@ fn file_materials(
             None => {
                 // Materials the file defines without a colour (NaN) are only an error
                 // if a triangle uses them, which `missing_reason` reports below.
-                let material = Material::lambertian(&name, fm.reflectance);
+                let material = Material {
+                    glossy_reflectance: fm.glossy_reflectance,
+                    roughness: fm.roughness,
+                    ..Material::lambertian(&name, fm.reflectance)
+                };
                 if !fm.reflectance.is_nan() {
                     validate_material(&material, &format!("{at}.file: material `{}`", fm.name))?;
                 }
