@@ -209,7 +209,9 @@ fn gltf_box_has_12_triangles_and_its_base_color() {
     assert_outward(&s, DVec3::ZERO);
     let m = &s.materials[s.geometry.material[0] as usize];
     assert_eq!(m.name, "gltf/Box.gltf:0");
-    assert!((m.reflectance - 0.2126 * 0.8).abs() < 1e-6);
+    // metallicFactor and roughnessFactor default to 1: a rough metal of albedo Y(base).
+    assert!((m.glossy_reflectance - 0.2126 * 0.8).abs() < 1e-6);
+    assert_eq!((m.reflectance, m.roughness), (0.0, 1.0));
 }
 
 #[test]
@@ -310,7 +312,8 @@ fn check_fixture_scene(mesh: &Path) {
     assert!(close(g.normal[0].as_dvec3(), DVec3::X, 1e-6));
     let m = &s.materials[g.material[0] as usize];
     assert!(m.name.ends_with(":paint"), "{}", m.name);
-    assert!((m.reflectance - (0.2126 * 0.5 + 0.7152 * 0.4 + 0.0722 * 0.3)).abs() < 1e-6);
+    // metallicFactor defaults to 1: the base colour is the glossy (metal) albedo.
+    assert!((m.glossy_reflectance - (0.2126 * 0.5 + 0.7152 * 0.4 + 0.0722 * 0.3)).abs() < 1e-6);
 }
 
 #[test]

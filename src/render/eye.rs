@@ -1,12 +1,15 @@
 //! The eye pass as a wavefront over SoA batches (pbrt-v4's stages): generate eye rays →
 //! intersect → at each hit add the indirect term and queue shadow rays for the direct
-//! term (method.md eqs. 1–2) and the specular continuations → trace the shadow rays →
-//! repeat on the continuations until none is left or the depth limit is reached.
+//! term (method.md eqs. 1–2) and the specular and glossy continuations → trace the
+//! shadow rays → repeat on the continuations until none is left or the depth limit is
+//! reached. Glossy surfaces take their direct light through the BSDF (`trace::bsdf`) by
+//! the same shadow rays, and continue through one sampled direction per glossy lobe.
 
 use super::map::IndirectField;
 use crate::accel::{HitBatch, RayBatch, RayCaster, NO_HIT};
 use crate::rng::photon_stream;
 use crate::scene::{Camera, Material, Scene};
+use crate::trace::bsdf::{fr_dielectric, Bsdf};
 use crate::trace::emit::{Emitter, Emitters};
 use crate::trace::sampling::uniform;
 use crate::trace::scatter::{offset_origin, reflect, refract};
@@ -101,6 +104,20 @@ pub struct EyePass<'a> {
     pinhole: Pinhole,
     scene_scale: f32,
     seed: u64,
+    /// Per material.
+    bsdfs: Vec<Bsdf>,
+}
+
+/// An eye path's state besides its ray.
+#[derive(Clone, Copy, Debug)]
+struct Path {
+    /// Sample within the tile.
+    sample: u32,
+    /// Throughput: the luminance the path's end adds is scaled by it.
+    weight: f64,
+    /// The segment leaves a glossy vertex, whose shadow rays already took the light of
+    /// the sources it sees: sources met along it are not counted again.
+    lights_counted: bool,
 }
 
 /// Reused buffers of one worker.
@@ -108,10 +125,10 @@ pub struct EyePass<'a> {
 pub struct Scratch {
     rays: RayBatch,
     hits: HitBatch,
-    /// Per ray: (sample within tile, weight).
-    paths: Vec<(u32, f64)>,
+    /// Per ray.
+    paths: Vec<Path>,
     next_rays: RayBatch,
-    next_paths: Vec<(u32, f64)>,
+    next_paths: Vec<Path>,
     shadow: RayBatch,
     /// Per shadow ray: (sample within tile, luminance it adds if unoccluded).
     shadow_gain: Vec<(u32, f64)>,
@@ -138,6 +155,7 @@ impl<'a> EyePass<'a> {
             pinhole: Pinhole::new(camera, origin),
             scene_scale,
             seed,
+            bsdfs: scene.materials.iter().map(Bsdf::new).collect(),
         }
     }
 
@@ -218,13 +236,18 @@ impl<'a> EyePass<'a> {
                 };
                 let d = self.pinhole.direction(px + jx, py + jy, w, h);
                 s.rays.push(eye, d.as_vec3().to_array(), 0.0, f32::INFINITY);
-                s.paths.push(((p * spp + k) as u32, 1.0));
+                s.paths.push(Path {
+                    sample: (p * spp + k) as u32,
+                    weight: 1.0,
+                    lights_counted: false,
+                });
             }
         }
     }
 
-    /// One eye ray's hit: emitters seen directly, the diffuse part (indirect now, direct
-    /// through queued shadow rays), and the specular continuations.
+    /// One eye ray's hit: emitters seen directly, the diffuse and glossy parts (indirect
+    /// now, direct through queued shadow rays), and the specular and glossy
+    /// continuations.
     fn shade(
         &self,
         k: usize,
@@ -233,7 +256,11 @@ impl<'a> EyePass<'a> {
         s: &mut Scratch,
         sample_l: &mut [f64],
     ) {
-        let (sample, weight) = s.paths[k];
+        let Path {
+            sample,
+            weight,
+            lights_counted,
+        } = s.paths[k];
         let o = DVec3::new(
             s.rays.ox[k] as f64,
             s.rays.oy[k] as f64,
@@ -246,7 +273,9 @@ impl<'a> EyePass<'a> {
         )
         .normalize();
         let t_hit = s.hits.t[k] as f64;
-        sample_l[sample as usize] += weight * self.area_light_seen(o, dir, t_hit);
+        if !lights_counted {
+            sample_l[sample as usize] += weight * self.area_light_seen(o, dir, t_hit);
+        }
         let tri = s.hits.tri[k];
         if tri == NO_HIT {
             return;
@@ -254,6 +283,9 @@ impl<'a> EyePass<'a> {
         let g = &self.scene.geometry;
         let t = tri as usize;
         let m: &Material = &self.scene.materials[g.material[t] as usize];
+        let bsdf = &self.bsdfs[g.material[t] as usize];
+        let (glossy_r, glossy_t) = bsdf.glossy();
+        let glossy = glossy_r + glossy_t > 0.0;
         let normal = g.normal[t];
         let n = normal.as_dvec3();
         let back = dir.dot(n) > 0.0;
@@ -268,12 +300,25 @@ impl<'a> EyePass<'a> {
             let e_other = self.field.illuminance_lx(t, !back, u, v);
             sample_l[sample as usize] +=
                 weight * (m.reflectance * e_seen + m.transmittance * e_other) / PI;
-            self.queue_direct(p, facing, m, (weight, sample, stream), s);
+        }
+        if glossy && !may_continue {
+            // The depth limit: the glossy lobes' indirect light is read from the map as
+            // if they were Lambertian of the same weights (the rough dielectric split by
+            // Fresnel at the viewing angle).
+            let e_seen = self.field.illuminance_lx(t, back, u, v);
+            let e_other = self.field.illuminance_lx(t, !back, u, v);
+            let cos_o = -dir.dot(n);
+            let r = fr_dielectric(cos_o, bsdf.ior());
+            sample_l[sample as usize] +=
+                weight * (glossy_r * e_seen + glossy_t * (r * e_seen + (1.0 - r) * e_other)) / PI;
+        }
+        if m.reflectance > 0.0 || m.transmittance > 0.0 || glossy {
+            self.queue_direct(p, n, facing, -dir, m, bsdf, (weight, sample, stream), s);
         }
         if !may_continue {
             return;
         }
-        let push = |s: &mut Scratch, d: DVec3, w: f64, leave: DVec3| {
+        let push_path = |s: &mut Scratch, d: DVec3, w: f64, leave: DVec3, counted: bool| {
             if w < MIN_WEIGHT {
                 return;
             }
@@ -284,8 +329,14 @@ impl<'a> EyePass<'a> {
                 0.0,
                 f32::INFINITY,
             );
-            s.next_paths.push((sample, w));
+            s.next_paths.push(Path {
+                sample,
+                weight: w,
+                lights_counted: counted,
+            });
         };
+        let push =
+            |s: &mut Scratch, d: DVec3, w: f64, leave: DVec3| push_path(s, d, w, leave, false);
         if m.specular_reflectance > 0.0 {
             push(
                 s,
@@ -306,27 +357,58 @@ impl<'a> EyePass<'a> {
                 None => push(s, reflect(dir, facing), w, facing),
             }
         }
+        if glossy {
+            // One sampled direction per glossy lobe, weight f·|cos|/pdf, from a stream of
+            // (tile, depth, ray) like the area-source pattern.
+            let mut rng = photon_stream(self.seed ^ 0x5a5a_0000_5a5a_0000, stream);
+            let wo = -dir;
+            if glossy_r > 0.0 {
+                let u = [uniform(&mut rng), uniform(&mut rng)];
+                if let Some(smp) = bsdf.sample_glossy_reflection(wo, n, u) {
+                    push_path(s, smp.dir, weight * glossy_r * smp.weight, facing, true);
+                }
+            }
+            if glossy_t > 0.0 {
+                let u = [uniform(&mut rng), uniform(&mut rng), uniform(&mut rng)];
+                if let Some(smp) = bsdf.sample_rough_dielectric(wo, n, u) {
+                    let leave = if smp.transmitted { -facing } else { facing };
+                    push_path(s, smp.dir, weight * glossy_t * smp.weight, leave, true);
+                }
+            }
+        }
     }
 
     /// Queues the shadow rays of the direct term at `p` (eqs. 1–2): each carries the
-    /// luminance it adds, ρ/π·E on the eye's side or τ/π·E from the other side.
+    /// luminance it adds, ρ/π·E on the eye's side or τ/π·E from the other side, plus
+    /// the glossy lobes' f(wo, ω_light)·E (`normal` the geometric normal, `wo` towards
+    /// the eye).
+    #[allow(clippy::too_many_arguments)]
     fn queue_direct(
         &self,
         p: Vec3,
+        normal: DVec3,
         facing: DVec3,
+        wo: DVec3,
         m: &Material,
+        bsdf: &Bsdf,
         (weight, sample, stream): (f64, u32, u64),
         s: &mut Scratch,
     ) {
         let pd = p.as_dvec3();
+        let (glossy_r, glossy_t) = bsdf.glossy();
+        let glossy = glossy_r + glossy_t > 0.0;
         // Luminance per lux arriving from direction `to_light` (unit).
         let gain = |to_light: DVec3| -> (f64, DVec3) {
             let cos = to_light.dot(facing);
-            if cos >= 0.0 {
+            let (mut g, side) = if cos >= 0.0 {
                 (weight * m.reflectance * cos / PI, facing)
             } else {
                 (weight * m.transmittance * -cos / PI, -facing)
+            };
+            if glossy {
+                g += weight * bsdf.f_glossy(wo, to_light, normal) * cos.abs();
             }
+            (g, side)
         };
         let push = |s: &mut Scratch, leave: DVec3, to: DVec3, tfar: f32, l: f64| {
             if l <= 0.0 {

@@ -37,6 +37,12 @@ pub struct MaterialFile {
     pub specular_transmittance: f64,
     #[serde(default = "default_ior")]
     pub ior: f64,
+    #[serde(default)]
+    pub glossy_reflectance: f64,
+    #[serde(default)]
+    pub glossy_transmittance: f64,
+    /// Required when a glossy part is set.
+    pub roughness: Option<f64>,
 }
 
 fn default_ior() -> f64 {

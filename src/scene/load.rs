@@ -48,6 +48,12 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
     for (key, value) in raw.materials {
         let path = format!("materials.{key}");
         let m: MaterialFile = file::entry(value, origin, &path)?;
+        if m.roughness.is_none() && m.glossy_reflectance + m.glossy_transmittance > 0.0 {
+            return Err(Error::input(
+                format!("{}.roughness", at(&path)),
+                "required with glossy_reflectance or glossy_transmittance",
+            ));
+        }
         let material = Material {
             name: key,
             reflectance: m.reflectance,
@@ -55,6 +61,9 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
             specular_reflectance: m.specular_reflectance,
             specular_transmittance: m.specular_transmittance,
             ior: m.ior,
+            glossy_reflectance: m.glossy_reflectance,
+            glossy_transmittance: m.glossy_transmittance,
+            roughness: m.roughness.unwrap_or(1.0),
         };
         validate_material(&material, &at(&path))?;
         materials.push(material);
@@ -131,13 +140,16 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
     })
 }
 
-/// Every fraction finite and ≥ 0, `ior` ≥ 1, and no energy created.
+/// Every fraction finite and ≥ 0, `ior` ≥ 1, roughness in (0, 1], and no energy
+/// created.
 fn validate_material(m: &Material, at: &str) -> Result<()> {
     let parts = [
         ("reflectance", m.reflectance),
         ("transmittance", m.transmittance),
         ("specular_reflectance", m.specular_reflectance),
         ("specular_transmittance", m.specular_transmittance),
+        ("glossy_reflectance", m.glossy_reflectance),
+        ("glossy_transmittance", m.glossy_transmittance),
     ];
     for (key, x) in parts {
         if !x.is_finite() || x < 0.0 {
@@ -153,6 +165,12 @@ fn validate_material(m: &Material, at: &str) -> Result<()> {
             format!("must be ≥ 1, got {}", m.ior),
         ));
     }
+    if !(m.roughness > 0.0 && m.roughness <= 1.0) {
+        return Err(Error::input(
+            format!("{at}.roughness"),
+            format!("must be in (0, 1], got {}", m.roughness),
+        ));
+    }
     // A little slack so that fractions written in decimal (0.7 + 0.2 + 0.1) sum to 1.
     let total = m.albedo();
     if total > 1.0 + 1e-9 {
@@ -160,7 +178,7 @@ fn validate_material(m: &Material, at: &str) -> Result<()> {
         let total = (total * 1e9).round() / 1e9;
         return Err(Error::input(
             at,
-            format!("energy-creating material: reflectance + transmittance + specular parts = {total} > 1"),
+            format!("energy-creating material: reflectance + transmittance + specular and glossy parts = {total} > 1"),
         ));
     }
     Ok(())
@@ -312,7 +330,11 @@ fn file_materials(
             None => {
                 // Materials the file defines without a colour (NaN) are only an error
                 // if a triangle uses them, which `missing_reason` reports below.
-                let material = Material::lambertian(&name, fm.reflectance);
+                let material = Material {
+                    glossy_reflectance: fm.glossy_reflectance,
+                    roughness: fm.roughness,
+                    ..Material::lambertian(&name, fm.reflectance)
+                };
                 if !fm.reflectance.is_nan() {
                     validate_material(&material, &format!("{at}.file: material `{}`", fm.name))?;
                 }

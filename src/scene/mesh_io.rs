@@ -1,7 +1,7 @@
 //! Mesh files: Wavefront OBJ (+ MTL) through `tobj`, glTF 2.0 (`.gltf`, `.glb`) through
 //! `gltf` without its `import` feature (we resolve buffers ourselves and never decode
 //! images). Both return world-space f64 triangles and the file's own materials, already
-//! reduced to a scalar reflectance.
+//! reduced to scalar diffuse and glossy reflectances and a roughness (docs/scene.md).
 
 use super::shapes::Mesh;
 use crate::error::{Error, Result};
@@ -19,7 +19,48 @@ pub fn rgb_to_reflectance(rgb: [f64; 3]) -> f64 {
 pub struct FileMaterial {
     /// The material's name in the file, or its index when unnamed.
     pub name: String,
+    /// Lambertian reflectance (NaN: the file gives no colour).
     pub reflectance: f64,
+    /// GGX glossy reflectance (0: none).
+    pub glossy_reflectance: f64,
+    /// Roughness of the glossy lobe, in (0, 1].
+    pub roughness: f64,
+}
+
+/// Smallest roughness a mesh file's material maps to (α = 10⁻⁶: a mirror in effect).
+pub const MIN_FILE_ROUGHNESS: f64 = 1e-3;
+
+/// MTL → (reflectance, glossy_reflectance, roughness). `Ks` (its luminance-weighted
+/// scalar k_s) becomes the glossy lobe and the diffuse part keeps what it leaves,
+/// Y(Kd)·(1 − k_s), so the sum never exceeds 1. The Blinn–Phong exponent `Ns` maps to
+/// the equivalent Beckmann/GGX width α = √(2/(Ns + 2)) (Walter et al. 2007), and
+/// roughness = √α; without `Ns` the lobe is as rough as it gets (roughness 1).
+pub fn mtl_to_material(kd: [f64; 3], ks: Option<[f64; 3]>, ns: Option<f64>) -> (f64, f64, f64) {
+    let diffuse = rgb_to_reflectance(kd);
+    let ks = ks.map_or(0.0, rgb_to_reflectance).clamp(0.0, 1.0);
+    if !(ks > 0.0) {
+        return (diffuse, 0.0, 1.0);
+    }
+    let ns = ns.unwrap_or(0.0).max(0.0);
+    let alpha = (2.0 / (ns + 2.0)).sqrt();
+    let roughness = alpha.sqrt().clamp(MIN_FILE_ROUGHNESS, 1.0);
+    (diffuse * (1.0 - ks), ks, roughness)
+}
+
+/// glTF metallic–roughness → (reflectance, glossy_reflectance, roughness), b = Y(base
+/// colour), m = metallicFactor (default 1 as the specification says): a metal (m) is a
+/// glossy lobe of albedo b; a dielectric (1 − m) has a 4 % specular glossy lobe (F0 of
+/// index 1.5) over a diffuse base of 0.96·b. glTF's roughnessFactor is already the
+/// perceptual roughness with α = roughness² (clamped to ≥ 10⁻³).
+pub fn gltf_to_material(base: [f64; 3], metallic: f64, roughness: f64) -> (f64, f64, f64) {
+    const F0: f64 = 0.04;
+    let b = rgb_to_reflectance(base);
+    let m = metallic.clamp(0.0, 1.0);
+    (
+        (1.0 - m) * (1.0 - F0) * b,
+        m * b + (1.0 - m) * F0,
+        roughness.clamp(MIN_FILE_ROUGHNESS, 1.0),
+    )
 }
 
 /// A loaded mesh file. `material[t]` indexes `materials`, or is `None` when the file gives
@@ -94,14 +135,25 @@ fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> 
                     m.name.clone()
                 };
                 match m.diffuse {
-                    Some(kd) => out.materials.push(FileMaterial {
-                        name,
-                        reflectance: rgb_to_reflectance(kd.map(f64::from)),
-                    }),
+                    Some(kd) => {
+                        let (reflectance, glossy_reflectance, roughness) = mtl_to_material(
+                            kd.map(f64::from),
+                            m.specular.map(|ks| ks.map(f64::from)),
+                            m.shininess.map(f64::from),
+                        );
+                        out.materials.push(FileMaterial {
+                            name,
+                            reflectance,
+                            glossy_reflectance,
+                            roughness,
+                        })
+                    }
                     // No Kd: keep the slot (indices must stay aligned) but mark it unusable.
                     None => out.materials.push(FileMaterial {
                         name,
                         reflectance: f64::NAN,
+                        glossy_reflectance: 0.0,
+                        roughness: 1.0,
                     }),
                 }
             }
@@ -442,10 +494,18 @@ impl GltfWalk<'_> {
             .materials()
             .nth(index)
             .ok_or_else(|| format!("material {index} does not exist"))?;
-        let [r, g, b, _alpha] = m.pbr_metallic_roughness().base_color_factor();
+        let pbr = m.pbr_metallic_roughness();
+        let [r, g, b, _alpha] = pbr.base_color_factor();
+        let (reflectance, glossy_reflectance, roughness) = gltf_to_material(
+            [r, g, b].map(f64::from),
+            pbr.metallic_factor().into(),
+            pbr.roughness_factor().into(),
+        );
         self.out.materials.push(FileMaterial {
             name: m.name().map_or_else(|| index.to_string(), str::to_string),
-            reflectance: rgb_to_reflectance([r, g, b].map(f64::from)),
+            reflectance,
+            glossy_reflectance,
+            roughness,
         });
         let s = (self.out.materials.len() - 1) as u32;
         *slot = Some(s);

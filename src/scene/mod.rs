@@ -16,8 +16,9 @@ pub mod shapes;
 
 pub use load::{load, load_str};
 
-/// A material: any mix of Lambertian reflection/transmission and ideal specular
-/// reflection/refraction. The fractions sum to at most 1; the rest is absorbed.
+/// A material: any mix of Lambertian reflection/transmission, ideal specular
+/// reflection/refraction and glossy (GGX microfacet) reflection/refraction
+/// (`trace::bsdf`). The fractions sum to at most 1; the rest is absorbed.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
@@ -29,7 +30,15 @@ pub struct Material {
     pub specular_reflectance: f64,
     /// Ideal refraction (dielectric of index `ior`, with Fresnel reflection at its face).
     pub specular_transmittance: f64,
+    /// Index of refraction of the dielectric lobes (ideal and rough).
     pub ior: f64,
+    /// Glossy reflector: a GGX lobe of this albedo weight (Fresnel factor 1).
+    pub glossy_reflectance: f64,
+    /// Rough dielectric (index `ior`, Fresnel reflection and refraction through GGX
+    /// microfacets) of this albedo weight.
+    pub glossy_transmittance: f64,
+    /// Perceptual roughness of the glossy lobes, in (0, 1]; GGX α = roughness².
+    pub roughness: f64,
 }
 
 impl Material {
@@ -42,6 +51,9 @@ impl Material {
             specular_reflectance: 0.0,
             specular_transmittance: 0.0,
             ior: 1.5,
+            glossy_reflectance: 0.0,
+            glossy_transmittance: 0.0,
+            roughness: 1.0,
         }
     }
 
@@ -51,6 +63,8 @@ impl Material {
             + self.transmittance
             + self.specular_reflectance
             + self.specular_transmittance
+            + self.glossy_reflectance
+            + self.glossy_transmittance
     }
 }
 

@@ -13,6 +13,7 @@
 //!   cross the receiver within its near zone (one cell diagonal from their vertex),
 //!   where connections would have unbounded variance.
 
+pub mod bsdf;
 pub mod direct;
 pub mod emit;
 pub mod sampling;
@@ -22,10 +23,11 @@ use crate::accel::{HitBatch, RayBatch, RayCaster, NO_HIT};
 use crate::rng::photon_stream;
 use crate::scene::{Estimator, Scene};
 use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid};
+use bsdf::{Bsdf, LobeKind};
 use emit::Emitters;
 use glam::{DVec3, Vec3};
 use rand_pcg::Pcg32;
-use scatter::{offset_origin, scatter, Event, Lobes};
+use scatter::{offset_origin, scatter};
 
 /// Photons traced together as one batch and tallied as one chunk. Chunks are fixed
 /// ranges of photon indices, which keeps the merge order independent of threads.
@@ -52,8 +54,8 @@ pub struct Tracer<'a> {
     vertices: &'a [Vec3],
     triangles: &'a [[u32; 3]],
     normals: &'a [Vec3],
-    /// Lobes per triangle's material, looked up through `triangle_material`.
-    lobes: Vec<Lobes>,
+    /// BSDF per triangle's material, looked up through `triangle_material`.
+    bsdfs: Vec<Bsdf>,
     triangle_material: &'a [u32],
     pub emitters: Emitters,
     pub receivers: Vec<ReceiverGrid>,
@@ -89,9 +91,10 @@ pub struct Scratch {
 enum Segment {
     /// At a light: its light on next-event receivers is the deterministic direct light.
     Emitted,
-    /// At a diffuse scattering: connected to next-event receivers beyond their near zone.
+    /// At a diffuse or connectable glossy scattering: connected to next-event receivers
+    /// beyond their near zone.
     Diffuse,
-    /// At a mirror or a refraction: cannot be connected.
+    /// At a mirror, a refraction or a glossy lobe too sharp to connect.
     Specular,
 }
 
@@ -142,7 +145,7 @@ impl<'a> Tracer<'a> {
             vertices: &g.vertices,
             triangles: &g.triangles,
             normals: &g.normal,
-            lobes: scene.materials.iter().map(Lobes::new).collect(),
+            bsdfs: scene.materials.iter().map(Bsdf::new).collect(),
             triangle_material: &g.material,
             emitters: Emitters::new(scene),
             receivers,
@@ -253,13 +256,13 @@ impl<'a> Tracer<'a> {
             let p = a + (b - a) * hits.u[k] + (c - a) * hits.v[k];
             let facing = if back_face { -normal } else { normal };
             let material = self.triangle_material[tri as usize] as usize;
-            let (rho, tau) = self.lobes[material].diffuse();
-            if rho + tau > 0.0 {
+            let bsdf = &self.bsdfs[material];
+            if bsdf.connectable() {
                 self.connect(
                     p,
-                    facing,
-                    rho,
-                    tau,
+                    normal,
+                    -dir,
+                    bsdf,
                     lane,
                     flux,
                     &mut s.shadow_rays,
@@ -271,14 +274,15 @@ impl<'a> Tracer<'a> {
                 tally.record_history_hits(lane.bounces + 1);
                 continue;
             }
-            let Event::Scattered {
-                dir: new_dir,
-                transmitted,
-                specular,
-            } = scatter(&self.lobes[material], dir, normal.as_dvec3(), &mut lane.rng)
-            else {
+            let Some(sample) = scatter(bsdf, dir, normal.as_dvec3(), &mut lane.rng) else {
                 tally.record_history_hits(lane.bounces + 1);
                 continue;
+            };
+            let (new_dir, transmitted) = (sample.dir, sample.transmitted);
+            let connected = match sample.kind {
+                LobeKind::Diffuse => true,
+                LobeKind::Glossy => bsdf.glossy_connectable(),
+                LobeKind::Specular => false,
             };
             let o = offset_origin(
                 p,
@@ -289,10 +293,10 @@ impl<'a> Tracer<'a> {
                 .push(o.into(), new_dir.as_vec3().into(), 0.0, f32::INFINITY);
             s.next_lanes.push(Lane {
                 bounces: lane.bounces + 1,
-                segment: if specular {
-                    Segment::Specular
-                } else {
+                segment: if connected {
                     Segment::Diffuse
+                } else {
+                    Segment::Specular
                 },
                 ..lane.clone()
             });
@@ -308,25 +312,27 @@ impl<'a> Tracer<'a> {
         }
     }
 
-    /// Next-event estimation from a diffuse vertex at `p` (side `facing` towards the
-    /// incoming photon; diffuse reflectance `rho` on that side, transmittance `tau` on
-    /// the other) to every next-event receiver: one sampled receiver point
-    /// ([`ReceiverGrid::connect`]) and its expected score, w·f·cos θ_s/π times the
-    /// connection's factor, queued behind a shadow ray. It does not depend on what the
+    /// Next-event estimation from a diffuse or glossy vertex at `p` (unit geometric
+    /// normal `normal`, `wo` towards where the photon came from) to every next-event
+    /// receiver: one sampled receiver point ([`ReceiverGrid::connect`]) and its expected
+    /// score, w·f(wo, wi)·|cos θ_i| times the connection's factor (w·ρ·cos θ/π for a
+    /// Lambertian surface), queued behind a shadow ray. It does not depend on what the
     /// roulette then picks.
     #[allow(clippy::too_many_arguments)]
     #[inline]
     fn connect(
         &self,
         p: Vec3,
-        facing: Vec3,
-        rho: f64,
-        tau: f64,
+        normal: Vec3,
+        wo: DVec3,
+        bsdf: &Bsdf,
         lane: &mut Lane,
         flux: f64,
         shadow_rays: &mut RayBatch,
         shadow_scores: &mut Vec<(u32, u32, f64)>,
     ) {
+        let n = normal.as_dvec3();
+        let facing = if wo.dot(n) >= 0.0 { normal } else { -normal };
         for (r, stratum) in self
             .receivers
             .iter()
@@ -342,16 +348,18 @@ impl<'a> Tracer<'a> {
                 continue;
             }
             let cos_s = c.dir.dot(facing.as_dvec3());
-            let (coefficient, side) = if cos_s > 0.0 {
-                (rho, facing)
-            } else {
-                (tau, -facing)
-            };
-            if coefficient <= 0.0 {
+            let side = if cos_s > 0.0 { facing } else { -facing };
+            // Intensity of the scattered photon towards the receiver point: Lambertian
+            // (written as ever, so diffuse scenes keep their bits) plus glossy.
+            let (rho, tau) = bsdf.diffuse();
+            let coefficient = if cos_s > 0.0 { rho } else { tau };
+            let mut intensity = flux * coefficient * cos_s.abs() * std::f64::consts::FRAC_1_PI;
+            if bsdf.glossy_connectable() {
+                intensity += flux * bsdf.f_glossy(wo, c.dir, n) * cos_s.abs();
+            }
+            if !(intensity > 0.0) {
                 continue;
             }
-            // Lambertian intensity of the scattered photon towards the receiver point.
-            let intensity = flux * coefficient * cos_s.abs() * std::f64::consts::FRAC_1_PI;
             let score = intensity * c.factor / r.connections as f64;
             let o = offset_origin(p, side, self.scene_scale);
             let to_q = (c.point - o.as_dvec3()).as_vec3();

@@ -1,109 +1,25 @@
 //! What a surface does to a photon: Russian roulette over the material's lobes (the
-//! photon keeps its flux, so grey materials never change a photon's weight), and the
-//! offset that starts the next ray off the surface without self-intersection.
+//! photon keeps its flux, so grey materials never change a photon's weight), the ideal
+//! reflection and refraction, and the offset that starts the next ray off the surface
+//! without self-intersection.
 
-use super::sampling::{cosine_hemisphere, uniform};
-use crate::scene::Material;
+use super::bsdf::{Bsdf, Sample};
+use super::sampling::uniform;
 use glam::{DVec3, Vec3};
 use rand_pcg::Pcg32;
 
-/// A material's lobes as cumulative thresholds for one uniform number.
-#[derive(Clone, Copy, Debug)]
-pub struct Lobes {
-    diffuse_reflect: f64,
-    diffuse_transmit: f64,
-    mirror: f64,
-    dielectric: f64,
-    ior: f64,
-}
-
-impl Lobes {
-    /// Diffuse reflectance and diffuse transmittance.
-    #[inline]
-    pub fn diffuse(&self) -> (f64, f64) {
-        (
-            self.diffuse_reflect,
-            self.diffuse_transmit - self.diffuse_reflect,
-        )
-    }
-
-    pub fn new(m: &Material) -> Lobes {
-        let diffuse_reflect = m.reflectance;
-        let diffuse_transmit = diffuse_reflect + m.transmittance;
-        let mirror = diffuse_transmit + m.specular_reflectance;
-        let dielectric = mirror + m.specular_transmittance;
-        Lobes {
-            diffuse_reflect,
-            diffuse_transmit,
-            mirror,
-            dielectric,
-            ior: m.ior,
-        }
-    }
-}
-
-/// What happened at a surface.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Event {
-    Absorbed,
-    /// Continues in `dir`; `transmitted` says it crossed to the other side;
-    /// `specular` that the lobe was a mirror or a dielectric (no diffuse vertex).
-    Scattered {
-        dir: DVec3,
-        transmitted: bool,
-        specular: bool,
-    },
-}
-
-/// Chooses the lobe by Russian roulette and samples the new direction. `dir` is the
-/// incoming unit direction, `normal` the unit geometric normal (either orientation).
-/// The dielectric's outside is the side `normal` points to.
+/// What a surface does to a photon: the BSDF's roulette over lobes picks one and samples
+/// its direction; a glossy sample's weight G₂/G₁ ≤ 1 (the energy a single-scattering
+/// microfacet lobe loses) is played by a second roulette, so every photon that goes on
+/// still carries the flux it was emitted with (the triangle tallies count photons).
+/// `None`: absorbed. Materials without glossy lobes draw the same numbers as ever.
 #[inline]
-pub fn scatter(lobes: &Lobes, dir: DVec3, normal: DVec3, rng: &mut Pcg32) -> Event {
-    let xi = uniform(rng);
-    let cos_in = dir.dot(normal);
-    // Normal on the side the photon comes from.
-    let facing = if cos_in < 0.0 { normal } else { -normal };
-    if xi < lobes.diffuse_reflect {
-        Event::Scattered {
-            dir: cosine_hemisphere(rng, facing),
-            transmitted: false,
-            specular: false,
-        }
-    } else if xi < lobes.diffuse_transmit {
-        Event::Scattered {
-            dir: cosine_hemisphere(rng, -facing),
-            transmitted: true,
-            specular: false,
-        }
-    } else if xi < lobes.mirror {
-        Event::Scattered {
-            dir: reflect(dir, facing),
-            transmitted: false,
-            specular: true,
-        }
-    } else if xi < lobes.dielectric {
-        let eta = if cos_in < 0.0 {
-            1.0 / lobes.ior
-        } else {
-            lobes.ior
-        };
-        match refract(dir, facing, eta) {
-            Some((refracted, fresnel)) if uniform(rng) >= fresnel => Event::Scattered {
-                dir: refracted,
-                transmitted: true,
-                specular: true,
-            },
-            // Fresnel reflection, or total internal reflection.
-            _ => Event::Scattered {
-                dir: reflect(dir, facing),
-                transmitted: false,
-                specular: true,
-            },
-        }
-    } else {
-        Event::Absorbed
+pub fn scatter(bsdf: &Bsdf, dir: DVec3, normal: DVec3, rng: &mut Pcg32) -> Option<Sample> {
+    let s = bsdf.sample(dir, normal, rng)?;
+    if s.weight < 1.0 && uniform(rng) >= s.weight {
+        return None;
     }
+    Some(s)
 }
 
 /// Mirror reflection of `dir` about the unit normal `n`.
