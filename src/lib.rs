@@ -10,6 +10,7 @@
 
 pub mod accel;
 pub mod bench;
+pub mod checkpoint;
 pub mod error;
 pub mod output;
 pub mod photometry;
