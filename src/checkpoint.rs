@@ -614,7 +614,7 @@ pub fn merge(
             return Err(Error::input(
                 origin(path),
                 format!(
-                    "shard {missing}/{count} is {} ",
+                    "shard {missing}/{count} is {}",
                     if (index as usize) < k {
                         "given twice"
                     } else {
