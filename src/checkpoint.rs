@@ -147,11 +147,14 @@ pub struct Resumed {
     pub chunks: Vec<ChunkRecord>,
 }
 
-/// Where a run starts and which photons it traces (see `run::run_from`).
+/// Where a run starts, which photons it traces and who traces them (see
+/// `run::run_from`).
 #[derive(Default)]
 pub struct Start {
     pub resumed: Option<Resumed>,
     pub shard: Option<ShardRange>,
+    /// Other processes sharing the chunks (MPI).
+    pub distributor: Option<Box<dyn crate::distributed::Distributor>>,
 }
 
 /// The options that change the numbers: a checkpoint is only continued, or merged,

@@ -11,6 +11,7 @@
 pub mod accel;
 pub mod bench;
 pub mod checkpoint;
+pub mod distributed;
 pub mod error;
 pub mod output;
 pub mod photometry;

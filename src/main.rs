@@ -3,6 +3,7 @@
 use clap::{Parser, Subcommand};
 use luxtally::accel::{self, Backend, RayCaster};
 use luxtally::checkpoint::{Checkpoint, Checkpointer, ShardRange};
+use luxtally::distributed::Distributor;
 use luxtally::output::{summary, write_atomic};
 use luxtally::render::{self, IndirectMap, MAP_FILE};
 use luxtally::run::{run_from, Observer, RunOptions, RunResult, RunState, Start};
@@ -343,6 +344,7 @@ fn photon_pass(
     caster: &dyn RayCaster,
     setup: Instant,
     out: &Path,
+    distributor: Option<Box<dyn Distributor>>,
 ) -> Result<RunResult> {
     let interrupt = Arc::new(AtomicBool::new(false));
     {
@@ -354,7 +356,8 @@ fn photon_pass(
             }
         });
     }
-    let start = resume_start(args, scene, options, out)?;
+    let mut start = resume_start(args, scene, options, out)?;
+    start.distributor = distributor;
     let shard = start.shard;
     if !(args.checkpoint_every > 0.0) {
         return Err(Error::input(
@@ -385,6 +388,14 @@ fn photon_pass(
     )?;
     if !args.quiet {
         eprintln!();
+        if let Some((s, bytes)) = observer.checkpoints.as_ref().and_then(|c| c.last_cost) {
+            eprintln!(
+                "checkpoint: {:.1} MB in {:.3} s ({:.3} s for all saves)",
+                bytes as f64 / 1e6,
+                s,
+                observer.checkpoints.as_ref().map_or(0.0, |c| c.total_s)
+            );
+        }
     }
     if let Some(e) = observer.save_error {
         return Err(e);
@@ -540,7 +551,26 @@ fn run_command(args: RunArgs) -> Result<()> {
     let out = out_dir(args.out.as_deref().or(args.resume.as_deref()), &scene)?;
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
-    let result = photon_pass(&args, &scene, &options, caster.as_ref(), setup, &out)?;
+    #[cfg(feature = "mpi")]
+    let cluster = cluster::Cluster::join();
+    #[allow(unused_mut)]
+    let mut distributor: Option<Box<dyn Distributor>> = None;
+    #[cfg(feature = "mpi")]
+    if let Some(c) = &cluster {
+        if c.rank() != 0 {
+            return c.serve(&scene, &options, caster.as_ref());
+        }
+        distributor = Some(Box::new(c.root()));
+    }
+    let result = photon_pass(
+        &args,
+        &scene,
+        &options,
+        caster.as_ref(),
+        setup,
+        &out,
+        distributor,
+    )?;
     if result.shard.is_none() {
         print_run(&args, &result.state(&scene, &options), &out);
     }
@@ -576,7 +606,15 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let map = match &args.from {
         Some(dir) => IndirectMap::load(&dir.join(MAP_FILE), &scene)?,
         None => {
-            let result = photon_pass(&args.run, &scene, &options, caster.as_ref(), setup, &out)?;
+            let result = photon_pass(
+                &args.run,
+                &scene,
+                &options,
+                caster.as_ref(),
+                setup,
+                &out,
+                None,
+            )?;
             print_run(&args.run, &result.state(&scene, &options), &out);
             IndirectMap::from_tallies(&scene, &result.tallies, result.setup.total_flux_lm)
         }
@@ -819,4 +857,66 @@ fn parse_estimator(name: &str) -> Result<Estimator> {
 
 fn all_cores() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// `mpirun -np N luxtally run ...` (feature `mpi`): rank 0 runs, the others trace the
+/// chunks it hands out (docs/distributed.md).
+#[cfg(feature = "mpi")]
+mod cluster {
+    use luxtally::accel::RayCaster;
+    use luxtally::distributed::mpi::{serve, Root};
+    use luxtally::run::RunOptions;
+    use luxtally::scene::Scene;
+    use luxtally::trace::Tracer;
+    use luxtally::{Error, Result};
+    use mpi::topology::Communicator;
+
+    pub struct Cluster {
+        universe: mpi::environment::Universe,
+    }
+
+    impl Cluster {
+        /// MPI, when started by mpirun with more than one rank (MPI is never initialised
+        /// otherwise: a plain run stays a plain process).
+        pub fn join() -> Option<Cluster> {
+            let launched = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"]
+                .iter()
+                .any(|v| std::env::var_os(v).is_some());
+            if !launched {
+                return None;
+            }
+            let universe = mpi::initialize()?;
+            (universe.world().size() > 1).then_some(Cluster { universe })
+        }
+
+        pub fn rank(&self) -> i32 {
+            self.universe.world().rank()
+        }
+
+        pub fn root(&self) -> Root {
+            Root {
+                world: self.universe.world(),
+                bytes_received: 0,
+            }
+        }
+
+        /// A worker rank: traces what rank 0 hands out until it says stop.
+        pub fn serve(
+            &self,
+            scene: &Scene,
+            options: &RunOptions,
+            caster: &dyn RayCaster,
+        ) -> Result<()> {
+            // Ctrl-C reaches every rank: rank 0 decides when to stop.
+            let _ = ctrlc::set_handler(|| {});
+            let threads = options.threads.max(1);
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
+            let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
+            serve(&self.universe.world(), &tracer, &pool);
+            Ok(())
+        }
+    }
 }

@@ -236,6 +236,9 @@ pub fn run_from(
         return Err(Error::input("--photons", "must be at least 1"));
     }
     let shard = start.shard;
+    let mut distributor = start.distributor;
+    // Every process's threads share an epoch's chunks.
+    let processes = distributor.as_ref().map_or(1, |d| d.processes());
     // A shard traces photons first_photon .. first_photon + max_photons.
     let (first_photon, max_photons) = match shard {
         Some(s) => (s.first_photon, s.end_photon - s.first_photon),
@@ -292,7 +295,7 @@ pub fn run_from(
     // never changes); each worker thread keeps its own scratch buffers.
     let mut buffers: Vec<ChunkTally> = Vec::new();
     let start = Instant::now();
-    let mut epoch_photons = CHUNK_PHOTONS * threads as u64;
+    let mut epoch_photons = CHUNK_PHOTONS * (threads * processes) as u64;
     let stop_reason = loop {
         // Epochs end at every schedule point, so every run passes through them.
         let count = epoch_photons
@@ -312,16 +315,22 @@ pub fn run_from(
             buffers.resize_with(chunks.len(), ChunkTally::default);
         }
         let results = &mut buffers[..chunks.len()];
-        pool.install(|| {
-            chunks
-                .par_iter()
-                .zip(results.par_iter_mut())
-                .for_each(|(&(first, n), tally)| {
-                    SCRATCH.with_borrow_mut(|scratch| {
-                        tracer.trace_chunk_into(first, n, scratch, tally)
+        let mut local = |chunks: &[(u64, u32)], results: &mut [ChunkTally]| {
+            pool.install(|| {
+                chunks
+                    .par_iter()
+                    .zip(results.par_iter_mut())
+                    .for_each(|(&(first, n), tally)| {
+                        SCRATCH.with_borrow_mut(|scratch| {
+                            tracer.trace_chunk_into(first, n, scratch, tally)
+                        })
                     })
-                })
-        });
+            })
+        };
+        match &mut distributor {
+            Some(d) => d.trace(&chunks, results, &mut local),
+            None => local(&chunks, results),
+        }
         let merge_start = Instant::now();
         for (chunk, &(_, n)) in results.iter().zip(&chunks) {
             tallies.accumulate(chunk, n as u64);
@@ -416,7 +425,7 @@ pub fn run_from(
             elapsed_s,
             options.time_limit_s,
             goal_photons,
-            threads,
+            threads * processes,
         );
     };
     Ok(RunResult {
