@@ -221,15 +221,15 @@ struct SavedTallies {
     killed_by_bounce_cap: u64,
     history_hits: [u128; 4],
     triangle_hits: Vec<u64>,
-    /// Per cell: moments' (sum, compensation) × 4, then the direct sums' × 4.
-    cell_sums: Vec<[f64; 16]>,
-    cell_hits: Vec<u64>,
+    /// The cells, packed by [`pack_cells`].
+    cells: Bytes,
     direct_replicates: u64,
     direct_rays: u64,
     dark: bool,
 }
 
 impl SavedTallies {
+    #[cfg(test)]
     fn of(t: &Tallies) -> SavedTallies {
         SavedTallies {
             photons: t.photons,
@@ -237,49 +237,122 @@ impl SavedTallies {
             killed_by_bounce_cap: t.killed_by_bounce_cap,
             history_hits: t.history_hits,
             triangle_hits: t.triangle_hits.clone(),
-            cell_sums: t
-                .cells
-                .iter()
-                .map(|c| {
-                    let mut a = [0.0; 16];
-                    for (k, s) in c.moments.iter().chain(&c.direct).enumerate() {
-                        (a[2 * k], a[2 * k + 1]) = s.parts();
-                    }
-                    a
-                })
-                .collect(),
-            cell_hits: t.cells.iter().map(|c| c.hits).collect(),
+            cells: Bytes(pack_cells(&t.cells)),
             direct_replicates: t.direct_replicates,
             direct_rays: t.direct_rays,
             dark: t.dark,
         }
     }
 
-    fn tallies(&self) -> Tallies {
-        let cell = |a: &[f64; 16], hits: u64| {
-            let s = |k: usize| CompensatedSum::from_parts(a[2 * k], a[2 * k + 1]);
-            CellSums {
-                moments: [s(0), s(1), s(2), s(3)],
-                hits,
-                direct: [s(4), s(5), s(6), s(7)],
-            }
-        };
-        Tallies {
+    fn tallies(&self) -> Option<Tallies> {
+        Some(Tallies {
             photons: self.photons,
             rays: self.rays,
             killed_by_bounce_cap: self.killed_by_bounce_cap,
             history_hits: self.history_hits,
             triangle_hits: self.triangle_hits.clone(),
-            cells: self
-                .cell_sums
-                .iter()
-                .zip(&self.cell_hits)
-                .map(|(a, &h)| cell(a, h))
-                .collect(),
+            cells: unpack_cells(&self.cells.0)?,
             direct_replicates: self.direct_replicates,
             direct_rays: self.direct_rays,
             dark: self.dark,
+        })
+    }
+}
+
+/// Cells as bytes, fast to write and small where cells are empty: per cell the hits
+/// (LEB128), a u16 mask of which of the 16 words (moments' sum and compensation × 4,
+/// then the direct sums') are not +0.0, and those words' bits (LE).
+fn pack_cells(cells: &[CellSums]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(cells.len() * 4);
+    for c in cells {
+        let mut h = c.hits;
+        while h >= 0x80 {
+            out.push((h as u8) | 0x80);
+            h >>= 7;
         }
+        out.push(h as u8);
+        let mut words = [0u64; 16];
+        for (k, s) in c.moments.iter().chain(&c.direct).enumerate() {
+            let (a, b) = s.parts();
+            (words[2 * k], words[2 * k + 1]) = (a.to_bits(), b.to_bits());
+        }
+        let mask = words
+            .iter()
+            .enumerate()
+            .fold(0u16, |m, (k, &w)| m | (((w != 0) as u16) << k));
+        out.extend_from_slice(&mask.to_le_bytes());
+        for w in words.iter().filter(|&&w| w != 0) {
+            out.extend_from_slice(&w.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// [`pack_cells`] read back; `None` if the bytes end early or run on.
+fn unpack_cells(bytes: &[u8]) -> Option<Vec<CellSums>> {
+    let mut cells = Vec::new();
+    let mut at = 0;
+    while at < bytes.len() {
+        let (mut hits, mut shift) = (0u64, 0);
+        loop {
+            let b = *bytes.get(at)?;
+            at += 1;
+            hits |= ((b & 0x7f) as u64).checked_shl(shift)?;
+            if b < 0x80 {
+                break;
+            }
+            shift += 7;
+        }
+        let mask = u16::from_le_bytes(bytes.get(at..at + 2)?.try_into().ok()?);
+        at += 2;
+        let mut words = [0u64; 16];
+        for (k, w) in words.iter_mut().enumerate() {
+            if mask & (1 << k) != 0 {
+                *w = u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?);
+                at += 8;
+            }
+        }
+        let s = |k: usize| {
+            CompensatedSum::from_parts(
+                f64::from_bits(words[2 * k]),
+                f64::from_bits(words[2 * k + 1]),
+            )
+        };
+        cells.push(CellSums {
+            moments: [s(0), s(1), s(2), s(3)],
+            hits,
+            direct: [s(4), s(5), s(6), s(7)],
+        });
+    }
+    Some(cells)
+}
+
+/// Bytes that postcard writes in one piece (a `Vec<u8>` would go byte by byte).
+#[derive(Clone, Debug, PartialEq)]
+struct Bytes(Vec<u8>);
+
+impl Serialize for Bytes {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_bytes(&self.0)
+    }
+}
+
+impl<'de> Deserialize<'de> for Bytes {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Bytes, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = Bytes;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("bytes")
+            }
+            fn visit_bytes<E>(self, v: &[u8]) -> std::result::Result<Bytes, E> {
+                Ok(Bytes(v.to_vec()))
+            }
+            fn visit_byte_buf<E>(self, v: Vec<u8>) -> std::result::Result<Bytes, E> {
+                Ok(Bytes(v))
+            }
+        }
+        d.deserialize_byte_buf(V)
     }
 }
 
@@ -306,7 +379,26 @@ pub struct Checkpoint {
 impl Checkpoint {
     /// The checkpoint of a run's state after an epoch.
     pub fn of(state: &RunState<'_>, scene_fingerprint: u64) -> Checkpoint {
-        Checkpoint {
+        let (mut c, cells) = Checkpoint::deferred(state, scene_fingerprint);
+        c.tallies.cells = Bytes(pack_cells(&cells));
+        c
+    }
+
+    /// [`Checkpoint::of`] with the cells still to pack (a copy, for another thread).
+    fn deferred(state: &RunState<'_>, scene_fingerprint: u64) -> (Checkpoint, Vec<CellSums>) {
+        let t = state.tallies;
+        let tallies = SavedTallies {
+            photons: t.photons,
+            rays: t.rays,
+            killed_by_bounce_cap: t.killed_by_bounce_cap,
+            history_hits: t.history_hits,
+            triangle_hits: t.triangle_hits.clone(),
+            cells: Bytes(Vec::new()),
+            direct_replicates: t.direct_replicates,
+            direct_rays: t.direct_rays,
+            dark: t.dark,
+        };
+        let c = Checkpoint {
             scene_path: state.scene.path.display().to_string(),
             scene_fingerprint,
             numbers: Numbers::of(state.options),
@@ -315,7 +407,7 @@ impl Checkpoint {
             finished: state
                 .stop_reason
                 .is_some_and(|r| r != StopReason::Interrupted),
-            tallies: SavedTallies::of(state.tallies),
+            tallies,
             direct_per_photon: state.resumable.direct_per_photon,
             history: state
                 .history
@@ -335,7 +427,8 @@ impl Checkpoint {
                 state.direct_s,
             ],
             chunks: state.resumable.chunks.to_vec(),
-        }
+        };
+        (c, t.cells.clone())
     }
 
     /// Photons traced so far (a shard's own).
@@ -343,10 +436,10 @@ impl Checkpoint {
         self.tallies.photons
     }
 
-    /// The state to go on from.
-    pub fn resumed(&self) -> Resumed {
-        Resumed {
-            tallies: self.tallies.tallies(),
+    /// The state to go on from; `None` if the cells do not read back.
+    pub fn resumed(&self) -> Option<Resumed> {
+        Some(Resumed {
+            tallies: self.tallies.tallies()?,
             history: self
                 .history
                 .iter()
@@ -364,7 +457,7 @@ impl Checkpoint {
             merge_s: self.times_s[2],
             direct_s: self.times_s[3],
             chunks: self.chunks.clone(),
-        }
+        })
     }
 
     /// Refuses a scene or options that would change the numbers; `what` names the file.
@@ -506,16 +599,21 @@ impl Fnv {
     }
 }
 
-/// Saves a running state's checkpoint every `period_s` and on the last epoch.
+/// Saves a running state's checkpoint every `period_s` and on the last epoch. The run
+/// waits only for a copy of the state; packing and writing happen on another thread
+/// (the last save is waited for).
 pub struct Checkpointer {
     pub dir: PathBuf,
     pub period_s: f64,
     pub fingerprint: u64,
     last: Instant,
-    /// Seconds and bytes of the latest save.
-    pub last_cost: Option<(f64, u64)>,
-    /// Seconds spent saving, in all.
+    pending: Option<std::thread::JoinHandle<Result<(f64, u64)>>>,
+    /// Seconds the run waited for the latest save, seconds its writing took, bytes.
+    pub last_cost: Option<(f64, f64, u64)>,
+    /// Seconds the run waited for saves, in all.
     pub total_s: f64,
+    /// Saves done.
+    pub saves: u64,
 }
 
 impl Checkpointer {
@@ -525,21 +623,51 @@ impl Checkpointer {
             period_s,
             fingerprint: fingerprint(scene),
             last: Instant::now(),
+            pending: None,
             last_cost: None,
             total_s: 0.0,
+            saves: 0,
         }
     }
 
-    /// Saves if due (or on the last epoch).
+    /// Waits for the save under way; returns its seconds and bytes.
+    fn finish_pending(&mut self) -> Result<Option<(f64, u64)>> {
+        match self.pending.take() {
+            None => Ok(None),
+            Some(h) => h
+                .join()
+                .map_err(|_| Error::Unsupported("the checkpoint writer panicked".into()))?
+                .map(Some),
+        }
+    }
+
+    /// Saves if due (or on the last epoch, then waiting until it is on disk).
     pub fn epoch(&mut self, state: &RunState<'_>) -> Result<()> {
-        if state.stop_reason.is_none() && self.last.elapsed().as_secs_f64() < self.period_s {
+        let last = state.stop_reason.is_some();
+        if !last && self.last.elapsed().as_secs_f64() < self.period_s {
             return Ok(());
         }
         let t = Instant::now();
-        let bytes = Checkpoint::of(state, self.fingerprint).save(&self.dir)?;
-        let s = t.elapsed().as_secs_f64();
-        self.total_s += s;
-        self.last_cost = Some((s, bytes));
+        let mut written = self.finish_pending()?;
+        let (mut c, cells) = Checkpoint::deferred(state, self.fingerprint);
+        let dir = self.dir.clone();
+        let handle = std::thread::spawn(move || {
+            let t = Instant::now();
+            c.tallies.cells = Bytes(pack_cells(&cells));
+            drop(cells);
+            let bytes = c.save(&dir)?;
+            Ok((t.elapsed().as_secs_f64(), bytes))
+        });
+        self.pending = Some(handle);
+        if last {
+            written = self.finish_pending()?;
+        }
+        let waited = t.elapsed().as_secs_f64();
+        self.total_s += waited;
+        self.saves += 1;
+        if let Some((s, bytes)) = written {
+            self.last_cost = Some((if last { waited - s } else { waited }, s, bytes));
+        }
         self.last = Instant::now();
         Ok(())
     }

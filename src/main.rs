@@ -388,13 +388,16 @@ fn photon_pass(
     )?;
     if !args.quiet {
         eprintln!();
-        if let Some((s, bytes)) = observer.checkpoints.as_ref().and_then(|c| c.last_cost) {
-            eprintln!(
-                "checkpoint: {:.1} MB in {:.3} s ({:.3} s for all saves)",
-                bytes as f64 / 1e6,
-                s,
-                observer.checkpoints.as_ref().map_or(0.0, |c| c.total_s)
-            );
+        if let Some(c) = &observer.checkpoints {
+            if let Some((waited, written, bytes)) = c.last_cost {
+                eprintln!(
+                    "checkpoint: {:.1} MB written in {written:.3} s; the run waited \
+                     {waited:.3} s for it, {:.3} s for all {} saves",
+                    bytes as f64 / 1e6,
+                    c.total_s,
+                    c.saves
+                );
+            }
         }
     }
     if let Some(e) = observer.save_error {
@@ -488,7 +491,12 @@ fn resume_start(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path)
                 "differs from the checkpoint's shard or its --photons",
             ));
         }
-        start.resumed = Some(c.resumed());
+        start.resumed = Some(c.resumed().ok_or_else(|| {
+            Error::input(
+                c.scene_path.clone(),
+                "the checkpoint's cells are corrupt (they do not read back)",
+            )
+        })?);
     }
     start.shard = shard;
     Ok(start)
