@@ -95,8 +95,11 @@ pub mod mpi {
     /// Rank 0's side.
     pub struct Root {
         pub world: SimpleCommunicator,
-        /// Bytes received from the workers, in all.
+        /// Bytes received from the workers, and epochs, in all.
         pub bytes_received: u64,
+        pub epochs: u64,
+        /// Print the traffic at the end.
+        pub report: bool,
     }
 
     impl Distributor for Root {
@@ -107,6 +110,7 @@ pub mod mpi {
             local: &mut dyn FnMut(&[(u64, u32)], &mut [ChunkTally]),
         ) {
             let size = self.world.size() as usize;
+            self.epochs += 1;
             for rank in 1..size {
                 let order = Order::Trace(chunks[share(chunks.len(), rank, size)].to_vec());
                 self.world
@@ -136,6 +140,15 @@ pub mod mpi {
     impl Drop for Root {
         /// Ends the workers, whatever ended the run.
         fn drop(&mut self) {
+            if self.report {
+                eprintln!(
+                    "mpi: {} ranks, {:.1} MB of chunk tallies received in {} epochs ({:.1} kB per epoch)",
+                    self.world.size(),
+                    self.bytes_received as f64 / 1e6,
+                    self.epochs,
+                    self.bytes_received as f64 / 1e3 / self.epochs.max(1) as f64
+                );
+            }
             for rank in 1..self.world.size() {
                 self.world
                     .process_at_rank(rank)

@@ -568,7 +568,7 @@ fn run_command(args: RunArgs) -> Result<()> {
         if c.rank() != 0 {
             return c.serve(&scene, &options, caster.as_ref());
         }
-        distributor = Some(Box::new(c.root()));
+        distributor = Some(Box::new(c.root(!args.quiet)));
     }
     let result = photon_pass(
         &args,
@@ -901,10 +901,12 @@ mod cluster {
             self.universe.world().rank()
         }
 
-        pub fn root(&self) -> Root {
+        pub fn root(&self, report: bool) -> Root {
             Root {
                 world: self.universe.world(),
                 bytes_received: 0,
+                epochs: 0,
+                report,
             }
         }
 
