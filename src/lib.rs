@@ -14,6 +14,8 @@
 
 pub mod accel;
 pub mod bench;
+pub mod checkpoint;
+pub mod distributed;
 pub mod error;
 pub mod limits;
 pub mod output;

@@ -4,10 +4,12 @@ mod progress;
 
 use clap::{Parser, Subcommand};
 use luxtally::accel::{self, Backend, RayCaster};
+use luxtally::checkpoint::{Checkpoint, Checkpointer, ShardRange};
+use luxtally::distributed::Distributor;
 use luxtally::limits;
 use luxtally::output::{summary, write_atomic};
 use luxtally::render::{self, IndirectMap, MAP_FILE};
-use luxtally::run::{run_with, Observer, RunOptions, RunResult, RunState};
+use luxtally::run::{run_from, Observer, RunOptions, RunResult, RunState, Start};
 use luxtally::scene::{Estimator, LightKind, Scene};
 use luxtally::{Error, Result};
 use progress::Progress;
@@ -35,6 +37,20 @@ enum Command {
     /// Photon pass (as `run`), then the eye pass from the scene's [camera]: render.exr,
     /// render.png and render_false_colour.png in --out.
     Render(RenderArgs),
+    /// Combine the checkpoints of `run --shard I/N` runs into the outputs of the whole
+    /// run, bit-identical to one run with the same seed and photons.
+    Merge {
+        /// The shards' output directories (each with checkpoint.bin).
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        #[arg(long)]
+        out: PathBuf,
+        /// The scene file (default: the one the shards recorded).
+        #[arg(long)]
+        scene: Option<PathBuf>,
+        #[arg(long)]
+        threads: Option<usize>,
+    },
     /// Print a scene's statistics: triangles, materials, lights, receivers, bounds.
     Info { scene: PathBuf },
     /// Rebuild report.html and the receivers' PNG previews from OUT_DIR/summary.json.
@@ -138,6 +154,17 @@ struct RunArgs {
     /// 8G, 8GiB or bytes; default: the memory available now).
     #[arg(long, value_name = "SIZE")]
     max_memory: Option<String>,
+    /// Save the run's whole state to OUT/checkpoint.bin this often, and when it ends.
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, default_value_t = luxtally::checkpoint::DEFAULT_PERIOD_S)]
+    checkpoint_every: f64,
+    /// Go on from OUT_DIR/checkpoint.bin (same scene, seed, estimator and backend;
+    /// --photons may grow). Outputs go to OUT_DIR unless --out says otherwise.
+    #[arg(long, value_name = "OUT_DIR")]
+    resume: Option<PathBuf>,
+    /// Trace only shard I of N of the photon range (needs --photons); combine the shards
+    /// with `luxtally merge`.
+    #[arg(long, value_name = "I/N")]
+    shard: Option<String>,
 }
 
 #[derive(clap::Args)]
@@ -180,6 +207,12 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => run_command(args),
         Command::Render(args) => render_command(args),
+        Command::Merge {
+            dirs,
+            out,
+            scene,
+            threads,
+        } => merge_command(&dirs, &out, scene.as_deref(), threads),
         Command::Info { scene } => info_command(&scene),
         Command::Report { out_dir } => luxtally::output::rebuild_report(&out_dir),
         Command::Photometry { file, out } => photometry_command(&file, out),
@@ -355,6 +388,7 @@ fn photon_pass(
     caster: &dyn RayCaster,
     setup: Instant,
     out: &Path,
+    distributor: Option<Box<dyn Distributor>>,
 ) -> Result<RunResult> {
     let interrupt = Arc::new(AtomicBool::new(false));
     {
@@ -366,6 +400,18 @@ fn photon_pass(
             }
         });
     }
+    let mut start = resume_start(args, scene, options, out)?;
+    start.distributor = distributor;
+    let shard = start.shard;
+    if !(args.checkpoint_every > 0.0) {
+        return Err(Error::input(
+            "--checkpoint-every",
+            format!(
+                "{} is not a positive number of seconds",
+                args.checkpoint_every
+            ),
+        ));
+    }
     let mut observer = CliObserver {
         progress: Progress::new(args.quiet, PER_MILLE, progress::RUN_TEMPLATE),
         out: out.to_path_buf(),
@@ -373,21 +419,183 @@ fn photon_pass(
         save_error: None,
         report_every_s: args.report_every,
         last_report: None,
+        checkpoints: Some(Checkpointer::new(out, args.checkpoint_every, scene)),
     };
-    let result = run_with(scene, options, caster, setup, &interrupt, &mut observer)?;
-    let state = result.state(scene, options);
+    let result = run_from(
+        scene,
+        options,
+        caster,
+        setup,
+        &interrupt,
+        &mut observer,
+        start,
+    )?;
+    if let Some(c) = &observer.checkpoints {
+        if let Some((waited, written, bytes)) = c.last_cost {
+            observer.progress.println(format!(
+                "checkpoint: {:.1} MB written in {written:.3} s; the run waited {waited:.3} s \
+                 for it, {:.3} s for all {} saves",
+                bytes as f64 / 1e6,
+                c.total_s,
+                c.saves
+            ));
+        }
+    }
     let interrupted = result.stop_reason == luxtally::stats::stop::StopReason::Interrupted;
     observer
         .progress
-        .finish(!interrupted, progress_line(&state));
-    save_summary(out, &state)?;
-    luxtally::output::write_run_files(out, &state)?;
+        .finish(!interrupted, progress_line(&result.state(scene, options)));
     if let Some(e) = observer.save_error {
         return Err(e);
     }
-    IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
-        .save(&out.join(MAP_FILE), scene)?;
+    if let Some(s) = shard {
+        // A shard's tallies alone mean nothing: its checkpoint is its output.
+        if !args.quiet {
+            eprintln!(
+                "shard {}/{}: photons {}..{} traced; checkpoint in {}",
+                s.index,
+                s.count,
+                s.first_photon,
+                s.end_photon,
+                out.display()
+            );
+        }
+        return Ok(result);
+    }
+    write_outputs(out, scene, options, &result)?;
     Ok(result)
+}
+
+/// summary.json, the run files and the indirect map of a finished run.
+fn write_outputs(
+    out: &Path,
+    scene: &Scene,
+    options: &RunOptions,
+    result: &RunResult,
+) -> Result<()> {
+    let state = result.state(scene, options);
+    save_summary(out, &state)?;
+    luxtally::output::write_run_files(out, &state)?;
+    IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
+        .save(&out.join(MAP_FILE), scene)
+}
+
+/// `--resume` and `--shard`: the checkpoint's state, checked against the scene and
+/// options, and the shard's photon range.
+fn resume_start(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> Result<Start> {
+    let mut start = Start::default();
+    let resumed = match &args.resume {
+        Some(dir) => {
+            let (c, path) = Checkpoint::load(dir)?;
+            c.check(&path, scene, options)?;
+            if options.photons.is_some_and(|n| n < c.photons()) && c.shard.is_none() {
+                return Err(Error::input(
+                    "--photons",
+                    format!(
+                        "{} is fewer than the {} photons of {}",
+                        options.photons.unwrap_or(0),
+                        c.photons(),
+                        path.display()
+                    ),
+                ));
+            }
+            if dir != out && !args.quiet {
+                eprintln!(
+                    "resuming from {}; outputs in {}",
+                    path.display(),
+                    out.display()
+                );
+            }
+            Some(c)
+        }
+        None => None,
+    };
+    let shard = match (&args.shard, &resumed) {
+        (Some(text), _) => {
+            if options.time_limit_s.is_some()
+                || options.target_error.is_some()
+                || options.min_hits.is_some()
+            {
+                return Err(Error::input(
+                    "--shard",
+                    "shards stop on --photons only (no --time-limit, --target-error, --min-hits)",
+                ));
+            }
+            let total = options
+                .photons
+                .ok_or_else(|| Error::input("--shard", "needs --photons"))?;
+            Some(ShardRange::parse(text, total)?)
+        }
+        (None, Some(c)) => c.shard,
+        (None, None) => None,
+    };
+    if let Some(c) = &resumed {
+        if c.shard != shard || (shard.is_some() && c.photons_goal != options.photons) {
+            return Err(Error::input(
+                "--shard",
+                "differs from the checkpoint's shard or its --photons",
+            ));
+        }
+        start.resumed = Some(c.resumed().ok_or_else(|| {
+            Error::input(
+                c.scene_path.clone(),
+                "the checkpoint's cells are corrupt (they do not read back)",
+            )
+        })?);
+    }
+    start.shard = shard;
+    Ok(start)
+}
+
+/// `merge`: the shards' checkpoints folded into the outputs of the whole run.
+fn merge_command(
+    dirs: &[PathBuf],
+    out: &Path,
+    scene: Option<&Path>,
+    threads: Option<usize>,
+) -> Result<()> {
+    let mut shards = Vec::new();
+    for dir in dirs {
+        let (c, path) = Checkpoint::load(dir)?;
+        shards.push((path, c));
+    }
+    let scene_path = match scene {
+        Some(p) => p.to_path_buf(),
+        None => PathBuf::from(&shards[0].1.scene_path),
+    };
+    let scene = luxtally::scene::load(&scene_path)?;
+    let numbers = &shards[0].1.numbers;
+    let mut options = RunOptions::from_scene(&scene);
+    options.seed = numbers.seed;
+    options.photons = shards[0].1.photons_goal;
+    options.backend = numbers.backend.parse()?;
+    options.estimator = match numbers.estimator.as_deref() {
+        None => None,
+        Some("Track") => Some(Estimator::Track),
+        Some("NextEvent") => Some(Estimator::NextEvent),
+        Some("Auto") => Some(Estimator::Auto),
+        Some(other) => {
+            return Err(Error::input(
+                shards[0].0.display().to_string(),
+                format!("unknown estimator `{other}`"),
+            ))
+        }
+    };
+    if let Some(t) = threads {
+        options.threads = t.max(1);
+    }
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let setup = Instant::now();
+    let caster = accel::build(options.backend, &scene.geometry)?;
+    let result = luxtally::checkpoint::merge(&scene, &options, caster.as_ref(), setup, shards)?;
+    write_outputs(out, &scene, &options, &result)?;
+    println!(
+        "merged {} shards: {} photons; results in {}",
+        dirs.len(),
+        result.tallies.photons,
+        out.display()
+    );
+    Ok(())
 }
 
 fn run_command(args: RunArgs) -> Result<()> {
@@ -395,7 +603,7 @@ fn run_command(args: RunArgs) -> Result<()> {
     let scene = luxtally::scene::load(&args.scene)?;
     let options = run_options(&args, &scene)?;
     limits::check_run(&scene, &options, None, true, &budget)?;
-    let dir = out_dir(args.out.as_deref(), &scene)?;
+    let dir = out_dir(args.out.as_deref().or(args.resume.as_deref()), &scene)?;
     dir.keep_on(run_into(&args, &scene, &options, &dir.path))
 }
 
@@ -403,8 +611,29 @@ fn run_command(args: RunArgs) -> Result<()> {
 fn run_into(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> Result<()> {
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
-    let result = photon_pass(args, scene, options, caster.as_ref(), setup, out)?;
-    print_run(args, &result.state(scene, options), out);
+    #[cfg(feature = "mpi")]
+    let cluster = cluster::Cluster::join();
+    #[allow(unused_mut)]
+    let mut distributor: Option<Box<dyn Distributor>> = None;
+    #[cfg(feature = "mpi")]
+    if let Some(c) = &cluster {
+        if c.rank() != 0 {
+            return c.serve(scene, options, caster.as_ref());
+        }
+        distributor = Some(Box::new(c.root(!args.quiet)));
+    }
+    let result = photon_pass(
+        args,
+        scene,
+        options,
+        caster.as_ref(),
+        setup,
+        out,
+        distributor,
+    )?;
+    if result.shard.is_none() {
+        print_run(args, &result.state(scene, options), out);
+    }
     Ok(())
 }
 
@@ -419,6 +648,12 @@ fn render_command(args: RenderArgs) -> Result<()> {
         camera.interpolate = false;
     }
     scene.camera = Some(camera.clone());
+    if args.run.shard.is_some() {
+        return Err(Error::input(
+            "--shard",
+            "render needs the whole run: merge the shards, then render --from",
+        ));
+    }
     limits::check_run(
         &scene,
         &options,
@@ -426,7 +661,14 @@ fn render_command(args: RenderArgs) -> Result<()> {
         args.from.is_none(),
         &budget,
     )?;
-    let dir = out_dir(args.run.out.as_deref().or(args.from.as_deref()), &scene)?;
+    let dir = out_dir(
+        args.run
+            .out
+            .as_deref()
+            .or(args.from.as_deref())
+            .or(args.run.resume.as_deref()),
+        &scene,
+    )?;
     dir.keep_on(render_into(&args, &scene, &options, &camera, &dir.path))
 }
 
@@ -444,7 +686,7 @@ fn render_into(
     let map = match &args.from {
         Some(dir) => IndirectMap::load(&dir.join(MAP_FILE), scene)?,
         None => {
-            let result = photon_pass(&args.run, scene, options, caster.as_ref(), setup, out)?;
+            let result = photon_pass(&args.run, scene, options, caster.as_ref(), setup, out, None)?;
             print_run(&args.run, &result.state(scene, options), out);
             IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
         }
@@ -545,6 +787,7 @@ struct CliObserver {
     /// `--report-every`: report.html is rewritten this often during the run.
     report_every_s: Option<f64>,
     last_report: Option<Instant>,
+    checkpoints: Option<Checkpointer>,
 }
 
 const SAVE_EVERY_S: f64 = 10.0;
@@ -610,6 +853,11 @@ impl Observer for CliObserver {
         if state.stop_reason.is_none() && self.last_save.elapsed().as_secs_f64() >= SAVE_EVERY_S {
             self.last_save = Instant::now();
             if let Err(e) = save_summary(&self.out, state) {
+                self.save_error.get_or_insert(e);
+            }
+        }
+        if let Some(c) = &mut self.checkpoints {
+            if let Err(e) = c.epoch(state) {
                 self.save_error.get_or_insert(e);
             }
         }
@@ -742,4 +990,68 @@ fn parse_estimator(name: &str) -> Result<Estimator> {
 
 fn all_cores() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// `mpirun -np N luxtally run ...` (feature `mpi`): rank 0 runs, the others trace the
+/// chunks it hands out (docs/distributed.md).
+#[cfg(feature = "mpi")]
+mod cluster {
+    use luxtally::accel::RayCaster;
+    use luxtally::distributed::mpi::{serve, Root};
+    use luxtally::run::RunOptions;
+    use luxtally::scene::Scene;
+    use luxtally::trace::Tracer;
+    use luxtally::{Error, Result};
+    use mpi::topology::Communicator;
+
+    pub struct Cluster {
+        universe: mpi::environment::Universe,
+    }
+
+    impl Cluster {
+        /// MPI, when started by mpirun with more than one rank (MPI is never initialised
+        /// otherwise: a plain run stays a plain process).
+        pub fn join() -> Option<Cluster> {
+            let launched = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"]
+                .iter()
+                .any(|v| std::env::var_os(v).is_some());
+            if !launched {
+                return None;
+            }
+            let universe = mpi::initialize()?;
+            (universe.world().size() > 1).then_some(Cluster { universe })
+        }
+
+        pub fn rank(&self) -> i32 {
+            self.universe.world().rank()
+        }
+
+        pub fn root(&self, report: bool) -> Root {
+            Root {
+                world: self.universe.world(),
+                bytes_received: 0,
+                epochs: 0,
+                report,
+            }
+        }
+
+        /// A worker rank: traces what rank 0 hands out until it says stop.
+        pub fn serve(
+            &self,
+            scene: &Scene,
+            options: &RunOptions,
+            caster: &dyn RayCaster,
+        ) -> Result<()> {
+            // Ctrl-C reaches every rank: rank 0 decides when to stop.
+            let _ = ctrlc::set_handler(|| {});
+            let threads = options.threads.max(1);
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
+            let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
+            serve(&self.universe.world(), &tracer, &pool);
+            Ok(())
+        }
+    }
 }

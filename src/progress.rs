@@ -100,6 +100,15 @@ impl Progress {
         }
     }
 
+    /// A line of its own, above a live bar (plain elsewhere; nothing when quiet).
+    pub fn println(&self, text: String) {
+        match &self.mode {
+            Mode::Quiet => {}
+            Mode::Live(bar) => bar.println(text),
+            Mode::Lines(_) => eprintln!("{text}"),
+        }
+    }
+
     /// Ends the step with `line`: left on the terminal (the bar full when `complete`,
     /// else where it stopped), printed as the last plain line elsewhere.
     pub fn finish(&self, complete: bool, line: String) {

@@ -2,6 +2,7 @@
 //! forecast and checked against the stop criteria; everything traced is in the result.
 
 use crate::accel::{self, Backend, RayCaster};
+pub use crate::checkpoint::{ChunkRecord, Resumed, ShardRange, Start};
 use crate::scene::{Estimator, Scene};
 use crate::stats::forecast::{forecast, Forecast, HistoryPoint};
 use crate::stats::stop::{min_hits, receiver_target_error, StopReason, Target};
@@ -99,6 +100,17 @@ pub struct RunState<'a> {
     pub direct_s: f64,
     /// Set on the last epoch.
     pub stop_reason: Option<StopReason>,
+    /// What a checkpoint needs besides the tallies (see `checkpoint`).
+    pub resumable: Resumable<'a>,
+}
+
+/// The state a checkpoint saves besides the tallies and history: the direct light's
+/// schedule and, for a shard, its range and per-chunk partials.
+#[derive(Clone, Copy)]
+pub struct Resumable<'a> {
+    pub direct_per_photon: f64,
+    pub shard: Option<ShardRange>,
+    pub chunks: &'a [ChunkRecord],
 }
 
 /// What a finished run hands to the outputs.
@@ -113,6 +125,9 @@ pub struct RunResult {
     pub stats_s: f64,
     pub merge_s: f64,
     pub direct_s: f64,
+    pub direct_per_photon: f64,
+    pub shard: Option<ShardRange>,
+    pub chunks: Vec<ChunkRecord>,
 }
 
 impl RunResult {
@@ -131,6 +146,11 @@ impl RunResult {
             merge_s: self.merge_s,
             direct_s: self.direct_s,
             stop_reason: Some(self.stop_reason),
+            resumable: Resumable {
+                direct_per_photon: self.direct_per_photon,
+                shard: self.shard,
+                chunks: &self.chunks,
+            },
         }
     }
 }
@@ -155,6 +175,28 @@ pub fn run_with(
     setup: Instant,
     interrupt: &AtomicBool,
     observer: &mut dyn Observer,
+) -> Result<RunResult> {
+    run_from(
+        scene,
+        options,
+        caster,
+        setup,
+        interrupt,
+        observer,
+        Start::default(),
+    )
+}
+
+/// [`run_with`] from a checkpoint's state (`start.resumed`) and/or over a shard's photon
+/// range only (`start.shard`: no direct light, chunk partials kept for the merge).
+pub fn run_from(
+    scene: &Scene,
+    options: &RunOptions,
+    caster: &dyn RayCaster,
+    setup: Instant,
+    interrupt: &AtomicBool,
+    observer: &mut dyn Observer,
+    start: Start,
 ) -> Result<RunResult> {
     crate::limits::validate(scene, options)?;
     let target = match &options.target {
@@ -194,6 +236,15 @@ pub fn run_with(
     if max_photons == 0 {
         return Err(Error::input("--photons", "must be at least 1"));
     }
+    let shard = start.shard;
+    let mut distributor = start.distributor;
+    // Every process's threads share an epoch's chunks.
+    let processes = distributor.as_ref().map_or(1, |d| d.processes());
+    // A shard traces photons first_photon .. first_photon + max_photons.
+    let (first_photon, max_photons) = match shard {
+        Some(s) => (s.first_photon, s.end_photon - s.first_photon),
+        None => (0, max_photons),
+    };
     let threads = options.threads.max(1);
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -201,7 +252,11 @@ pub fn run_with(
         .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
     let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
     let total_flux_lm = tracer.emitters.total_flux_lm;
-    let mut tallies = Tallies::new(scene.geometry.triangle_count(), tracer.cell_count());
+    let resumed = start.resumed;
+    let mut tallies = match &resumed {
+        Some(r) => r.tallies.clone(),
+        None => Tallies::new(scene.geometry.triangle_count(), tracer.cell_count()),
+    };
     tallies.dark = !(total_flux_lm > 0.0);
     let direct = DirectLight {
         emitters: &tracer.emitters,
@@ -209,8 +264,12 @@ pub fn run_with(
         slack: tracer.receiver_slack,
         seed: options.seed,
     };
-    let mut direct_schedule = DirectSchedule { per_photon: 0.0 };
-    let mut direct_s = add_direct(&tracer, &direct, &mut tallies, PILOT_REPLICATES, &pool);
+    let mut direct_schedule = DirectSchedule {
+        per_photon: resumed.as_ref().map_or(0.0, |r| r.direct_per_photon),
+    };
+    // Shards leave the direct light to the merge; a resumed run has its pilot already.
+    let pilot = if shard.is_some() { 0 } else { PILOT_REPLICATES };
+    let mut direct_s = add_direct(&tracer, &direct, &mut tallies, pilot, &pool);
     let run_setup = RunSetup {
         setup_s: setup.elapsed().as_secs_f64(),
         total_flux_lm,
@@ -222,12 +281,22 @@ pub fn run_with(
     let (mut stats_s, mut merge_s) = (0.0, 0.0);
     let mut history: Vec<HistoryPoint> = Vec::new();
     let mut latest_forecast = None;
+    let mut chunk_log: Vec<ChunkRecord> = Vec::new();
+    // A resumed run goes on from the saved clock and history.
+    let mut elapsed_before_s = 0.0;
+    if let Some(r) = resumed {
+        direct_s += r.direct_s;
+        (stats_s, merge_s) = (r.stats_s, r.merge_s);
+        history = r.history;
+        chunk_log = r.chunks;
+        elapsed_before_s = r.elapsed_s;
+    }
 
     // Chunk tallies are reused from epoch to epoch (in chunk order, so the merge order
     // never changes); each worker thread keeps its own scratch buffers.
     let mut buffers: Vec<ChunkTally> = Vec::new();
     let start = Instant::now();
-    let mut epoch_photons = CHUNK_PHOTONS * threads as u64;
+    let mut epoch_photons = CHUNK_PHOTONS * (threads * processes) as u64;
     let stop_reason = loop {
         // Epochs end at every schedule point, so every run passes through them.
         let count = epoch_photons
@@ -236,10 +305,10 @@ pub fn run_with(
         let epoch_start = Instant::now();
         let chunks: Vec<(u64, u32)> = (0..count.div_ceil(CHUNK_PHOTONS))
             .map(|c| {
-                let first = tallies.photons + c * CHUNK_PHOTONS;
+                let first = first_photon + tallies.photons + c * CHUNK_PHOTONS;
                 (
                     first,
-                    CHUNK_PHOTONS.min(tallies.photons + count - first) as u32,
+                    CHUNK_PHOTONS.min(first_photon + tallies.photons + count - first) as u32,
                 )
             })
             .collect();
@@ -247,27 +316,34 @@ pub fn run_with(
             buffers.resize_with(chunks.len(), ChunkTally::default);
         }
         let results = &mut buffers[..chunks.len()];
-        pool.install(|| {
-            chunks
-                .par_iter()
-                .zip(results.par_iter_mut())
-                .for_each(|(&(first, n), tally)| {
-                    SCRATCH.with_borrow_mut(|scratch| {
-                        tracer.trace_chunk_into(first, n, scratch, tally)
+        let mut local = |chunks: &[(u64, u32)], results: &mut [ChunkTally]| {
+            pool.install(|| {
+                chunks
+                    .par_iter()
+                    .zip(results.par_iter_mut())
+                    .for_each(|(&(first, n), tally)| {
+                        SCRATCH.with_borrow_mut(|scratch| {
+                            tracer.trace_chunk_into(first, n, scratch, tally)
+                        })
                     })
-                })
-        });
+            })
+        };
+        match &mut distributor {
+            Some(d) => d.trace(&chunks, results, &mut local),
+            None => local(&chunks, results),
+        }
         let merge_start = Instant::now();
         for (chunk, &(_, n)) in results.iter().zip(&chunks) {
             tallies.accumulate(chunk, n as u64);
+            if shard.is_some() {
+                chunk_log.push(ChunkRecord::of(chunk, n));
+            }
         }
         merge_s += merge_start.elapsed().as_secs_f64();
-        if tallies.photons.is_power_of_two() && tallies.photons >= CHUNK_PHOTONS {
-            direct_schedule = schedule_direct(&tracer, &tallies);
+        if shard.is_none() {
+            direct_s += top_up_direct(&tracer, &direct, &mut tallies, &mut direct_schedule, &pool);
         }
-        let wanted = direct_schedule.wanted(tallies.photons, tallies.direct_replicates);
-        direct_s += add_direct(&tracer, &direct, &mut tallies, wanted, &pool);
-        let elapsed_s = start.elapsed().as_secs_f64();
+        let elapsed_s = elapsed_before_s + start.elapsed().as_secs_f64();
         let stats_start = Instant::now();
 
         let error = target_error(scene, &target, &tallies, total_flux_lm, options.absolute);
@@ -320,6 +396,11 @@ pub fn run_with(
             merge_s,
             direct_s,
             stop_reason: reason,
+            resumable: Resumable {
+                direct_per_photon: direct_schedule.per_photon,
+                shard,
+                chunks: &chunk_log,
+            },
         });
         if let Some(reason) = reason {
             break reason;
@@ -345,7 +426,7 @@ pub fn run_with(
             elapsed_s,
             options.time_limit_s,
             goal_photons,
-            threads,
+            threads * processes,
         );
     };
     Ok(RunResult {
@@ -355,16 +436,42 @@ pub fn run_with(
         forecast: latest_forecast,
         target,
         stop_reason,
-        elapsed_s: start.elapsed().as_secs_f64(),
+        elapsed_s: elapsed_before_s + start.elapsed().as_secs_f64(),
         stats_s,
         merge_s,
         direct_s,
+        direct_per_photon: direct_schedule.per_photon,
+        shard,
+        chunks: chunk_log,
     })
+}
+
+/// The direct light after the photons reached `tallies.photons`: at a schedule point
+/// (`CHUNK_PHOTONS`·2^k) first the replicates the old schedule wants there, then the
+/// schedule re-estimated; then the replicates it wants. The replicate count and every
+/// sum the schedule reads are thus functions of the photon count alone, whatever the
+/// epochs (a resumed run and a merge of shards pass through the same states).
+/// Returns the seconds it took.
+pub(crate) fn top_up_direct(
+    tracer: &Tracer<'_>,
+    direct: &DirectLight<'_>,
+    tallies: &mut Tallies,
+    schedule: &mut DirectSchedule,
+    pool: &rayon::ThreadPool,
+) -> f64 {
+    let mut seconds = 0.0;
+    if tallies.photons.is_power_of_two() && tallies.photons >= CHUNK_PHOTONS {
+        let wanted = schedule.wanted(tallies.photons, tallies.direct_replicates);
+        seconds += add_direct(tracer, direct, tallies, wanted, pool);
+        *schedule = schedule_direct(tracer, tallies);
+    }
+    let wanted = schedule.wanted(tallies.photons, tallies.direct_replicates);
+    seconds + add_direct(tracer, direct, tallies, wanted, pool)
 }
 
 /// Tops the next-event receivers' direct light up to `wanted` replicates; returns the
 /// seconds it took.
-fn add_direct(
+pub(crate) fn add_direct(
     tracer: &Tracer<'_>,
     direct: &DirectLight<'_>,
     tallies: &mut Tallies,
@@ -415,7 +522,7 @@ fn next_schedule_point(done: u64) -> u64 {
 }
 
 /// The target's error now: the global map's odd/even error, or the receiver's.
-fn target_error(
+pub(crate) fn target_error(
     scene: &Scene,
     target: &Target,
     tallies: &Tallies,

@@ -106,6 +106,16 @@ impl CompensatedSum {
     pub fn value(&self) -> f64 {
         self.sum + self.compensation
     }
+
+    /// The running sum and its compensation term, bit for bit (checkpoints).
+    pub fn parts(&self) -> (f64, f64) {
+        (self.sum, self.compensation)
+    }
+
+    /// The sum whose [`parts`](Self::parts) are these.
+    pub fn from_parts(sum: f64, compensation: f64) -> CompensatedSum {
+        CompensatedSum { sum, compensation }
+    }
 }
 
 /// Per-cell moments of the history scores, and of the cell's sampled direct light.

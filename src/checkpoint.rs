@@ -1,0 +1,900 @@
+//! Checkpoints, resume, shards and their merge (docs/distributed.md).
+//!
+//! A checkpoint is a run's whole state after an epoch: every tally as raw bits
+//! (compensated sums with their compensation terms), the counters, the history, the
+//! direct light's schedule, the options that change the numbers and a fingerprint of the
+//! scene. Tallies at N photons are chunk partials folded in chunk order, and the direct
+//! light is a function of N alone (`run::top_up_direct`), so a run resumed from a
+//! checkpoint ends bit-identical to one never stopped.
+//!
+//! Shards: shard I of N traces a contiguous range of whole chunks and keeps each chunk's
+//! receiver partials (compensated sums are not associative bit for bit, so shard totals
+//! cannot be added); the merge folds every chunk again in global chunk order, adding the
+//! integer counters as totals, and computes the direct light from the total photon
+//! count, exactly as one run would.
+//!
+//! File layout: `LUXCKPT1`, format version (u32 LE), payload length (u64 LE), CRC-32 of
+//! the payload (u32 LE), then the payload (postcard).
+
+use crate::accel::RayCaster;
+use crate::run::{add_direct, top_up_direct, RunOptions, RunResult, RunSetup, RunState};
+use crate::scene::Scene;
+use crate::stats::forecast::HistoryPoint;
+use crate::stats::stop::{StopReason, Target};
+use crate::tally::{CellPartial, CellSums, ChunkTally, CompensatedSum, Tallies};
+use crate::trace::direct::{DirectLight, DirectSchedule, PILOT_REPLICATES};
+use crate::trace::{Tracer, CHUNK_PHOTONS};
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The checkpoint in an output directory, and the one before it.
+pub const FILE: &str = "checkpoint.bin";
+pub const PREVIOUS_FILE: &str = "checkpoint.prev";
+const MAGIC: &[u8; 8] = b"LUXCKPT1";
+/// Bumped whenever the payload's layout changes; older files are refused.
+pub const FORMAT_VERSION: u32 = 1;
+const HEADER_BYTES: usize = 8 + 4 + 8 + 4;
+/// Seconds between checkpoints unless `--checkpoint-every` says otherwise.
+pub const DEFAULT_PERIOD_S: f64 = 60.0;
+
+/// Shard `index` of `count`: the photons `first_photon .. end_photon`, whole chunks of
+/// the run's chunk sequence.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ShardRange {
+    pub index: u32,
+    pub count: u32,
+    pub first_photon: u64,
+    pub end_photon: u64,
+}
+
+impl ShardRange {
+    /// Shard `index` (from 0) of `count` over `total` photons: chunks split as evenly as
+    /// whole chunks allow.
+    pub fn new(index: u32, count: u32, total: u64) -> Result<ShardRange> {
+        if count == 0 || index >= count {
+            return Err(Error::input(
+                "--shard",
+                format!("{index}/{count}: expected I/N with 0 ≤ I < N"),
+            ));
+        }
+        let chunks = total.div_ceil(CHUNK_PHOTONS);
+        if chunks < count as u64 {
+            return Err(Error::input(
+                "--shard",
+                format!(
+                    "{count} shards need at least {count} chunks of {CHUNK_PHOTONS} photons; \
+                     --photons is {total}"
+                ),
+            ));
+        }
+        let chunk_of = |i: u64| (chunks as u128 * i as u128 / count as u128) as u64;
+        Ok(ShardRange {
+            index,
+            count,
+            first_photon: (chunk_of(index as u64) * CHUNK_PHOTONS).min(total),
+            end_photon: (chunk_of(index as u64 + 1) * CHUNK_PHOTONS).min(total),
+        })
+    }
+
+    /// `I/N` of the command line.
+    pub fn parse(text: &str, total: u64) -> Result<ShardRange> {
+        let bad = || Error::input("--shard", format!("`{text}`: expected I/N, e.g. 0/4"));
+        let (i, n) = text.split_once('/').ok_or_else(bad)?;
+        let i: u32 = i.trim().parse().map_err(|_| bad())?;
+        let n: u32 = n.trim().parse().map_err(|_| bad())?;
+        ShardRange::new(i, n, total)
+    }
+}
+
+/// One receiver cell's partial of one chunk.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SavedPartial {
+    pub cell: u32,
+    pub hits: u64,
+    pub moments: [f64; 4],
+}
+
+/// What the merge needs of one chunk of a shard: its photons, photon rays and receiver
+/// partials (the integer counters are added as shard totals).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ChunkRecord {
+    pub photons: u32,
+    pub rays: u64,
+    pub cells: Vec<SavedPartial>,
+}
+
+impl ChunkRecord {
+    pub fn of(chunk: &ChunkTally, photons: u32) -> ChunkRecord {
+        ChunkRecord {
+            photons,
+            rays: chunk.rays,
+            cells: chunk
+                .scores
+                .iter()
+                .map(|p| SavedPartial {
+                    cell: p.cell,
+                    hits: p.hits,
+                    moments: p.moments,
+                })
+                .collect(),
+        }
+    }
+
+    /// The chunk as a tally to fold (no deposits: the triangle map is added as totals).
+    fn to_chunk(&self, chunk: &mut ChunkTally) {
+        chunk.clear();
+        chunk.rays = self.rays;
+        chunk.scores.extend(self.cells.iter().map(|p| CellPartial {
+            cell: p.cell,
+            hits: p.hits,
+            moments: p.moments,
+        }));
+    }
+}
+
+/// A run's state to go on from.
+pub struct Resumed {
+    pub tallies: Tallies,
+    pub history: Vec<HistoryPoint>,
+    pub direct_per_photon: f64,
+    pub elapsed_s: f64,
+    pub stats_s: f64,
+    pub merge_s: f64,
+    pub direct_s: f64,
+    pub chunks: Vec<ChunkRecord>,
+}
+
+/// Where a run starts, which photons it traces and who traces them (see
+/// `run::run_from`).
+#[derive(Default)]
+pub struct Start {
+    pub resumed: Option<Resumed>,
+    pub shard: Option<ShardRange>,
+    /// Other processes sharing the chunks (MPI).
+    pub distributor: Option<Box<dyn crate::distributed::Distributor>>,
+}
+
+/// The options that change the numbers: a checkpoint is only continued, or merged,
+/// with the same ones.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Numbers {
+    pub seed: u64,
+    /// `--estimator`, if any.
+    pub estimator: Option<String>,
+    /// The backend casts the rays: another one gives other bits.
+    pub backend: String,
+}
+
+impl Numbers {
+    pub fn of(options: &RunOptions) -> Numbers {
+        Numbers {
+            seed: options.seed,
+            estimator: options.estimator.map(|e| format!("{e:?}")),
+            backend: options.backend.name().to_string(),
+        }
+    }
+
+    /// What differs from `other` (the run asked for), in words; `None` if nothing.
+    pub fn difference(&self, now: &Numbers) -> Option<String> {
+        if self.seed != now.seed {
+            return Some(format!(
+                "the seed differs (checkpoint {}, now {})",
+                self.seed, now.seed
+            ));
+        }
+        if self.estimator != now.estimator {
+            let show = |e: &Option<String>| e.clone().unwrap_or_else(|| "none".into());
+            return Some(format!(
+                "--estimator differs (checkpoint {}, now {})",
+                show(&self.estimator),
+                show(&now.estimator)
+            ));
+        }
+        if self.backend != now.backend {
+            return Some(format!(
+                "the backend differs (checkpoint {}, now {})",
+                self.backend, now.backend
+            ));
+        }
+        None
+    }
+}
+
+/// A history point as saved (postcard cannot skip fields).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+struct SavedPoint {
+    elapsed_s: f64,
+    photons: u64,
+    rel_error: f64,
+    forecast_s: Option<f64>,
+    forecast_photons: Option<u64>,
+}
+
+/// [`Tallies`] as saved: every compensated sum as (sum, compensation).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct SavedTallies {
+    photons: u64,
+    rays: u64,
+    killed_by_bounce_cap: u64,
+    history_hits: [u128; 4],
+    triangle_hits: Vec<u64>,
+    /// The cells, packed by [`pack_cells`].
+    cells: Bytes,
+    direct_replicates: u64,
+    direct_rays: u64,
+    dark: bool,
+}
+
+impl SavedTallies {
+    #[cfg(test)]
+    fn of(t: &Tallies) -> SavedTallies {
+        SavedTallies {
+            photons: t.photons,
+            rays: t.rays,
+            killed_by_bounce_cap: t.killed_by_bounce_cap,
+            history_hits: t.history_hits,
+            triangle_hits: t.triangle_hits.clone(),
+            cells: Bytes(pack_cells(&t.cells)),
+            direct_replicates: t.direct_replicates,
+            direct_rays: t.direct_rays,
+            dark: t.dark,
+        }
+    }
+
+    fn tallies(&self) -> Option<Tallies> {
+        Some(Tallies {
+            photons: self.photons,
+            rays: self.rays,
+            killed_by_bounce_cap: self.killed_by_bounce_cap,
+            history_hits: self.history_hits,
+            triangle_hits: self.triangle_hits.clone(),
+            cells: unpack_cells(&self.cells.0)?,
+            direct_replicates: self.direct_replicates,
+            direct_rays: self.direct_rays,
+            dark: self.dark,
+        })
+    }
+}
+
+/// Cells as bytes, fast to write and small where cells are empty: per cell the hits
+/// (LEB128), a u16 mask of which of the 16 words (moments' sum and compensation × 4,
+/// then the direct sums') are not +0.0, and those words' bits (LE).
+fn pack_cells(cells: &[CellSums]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(cells.len() * 4);
+    for c in cells {
+        let mut h = c.hits;
+        while h >= 0x80 {
+            out.push((h as u8) | 0x80);
+            h >>= 7;
+        }
+        out.push(h as u8);
+        let mut words = [0u64; 16];
+        for (k, s) in c.moments.iter().chain(&c.direct).enumerate() {
+            let (a, b) = s.parts();
+            (words[2 * k], words[2 * k + 1]) = (a.to_bits(), b.to_bits());
+        }
+        let mask = words
+            .iter()
+            .enumerate()
+            .fold(0u16, |m, (k, &w)| m | (((w != 0) as u16) << k));
+        out.extend_from_slice(&mask.to_le_bytes());
+        for w in words.iter().filter(|&&w| w != 0) {
+            out.extend_from_slice(&w.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// [`pack_cells`] read back; `None` if the bytes end early or run on.
+fn unpack_cells(bytes: &[u8]) -> Option<Vec<CellSums>> {
+    let mut cells = Vec::new();
+    let mut at = 0;
+    while at < bytes.len() {
+        let (mut hits, mut shift) = (0u64, 0);
+        loop {
+            let b = *bytes.get(at)?;
+            at += 1;
+            hits |= ((b & 0x7f) as u64).checked_shl(shift)?;
+            if b < 0x80 {
+                break;
+            }
+            shift += 7;
+        }
+        let mask = u16::from_le_bytes(bytes.get(at..at + 2)?.try_into().ok()?);
+        at += 2;
+        let mut words = [0u64; 16];
+        for (k, w) in words.iter_mut().enumerate() {
+            if mask & (1 << k) != 0 {
+                *w = u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?);
+                at += 8;
+            }
+        }
+        let s = |k: usize| {
+            CompensatedSum::from_parts(
+                f64::from_bits(words[2 * k]),
+                f64::from_bits(words[2 * k + 1]),
+            )
+        };
+        cells.push(CellSums {
+            moments: [s(0), s(1), s(2), s(3)],
+            hits,
+            direct: [s(4), s(5), s(6), s(7)],
+        });
+    }
+    Some(cells)
+}
+
+/// Bytes that postcard writes in one piece (a `Vec<u8>` would go byte by byte).
+#[derive(Clone, Debug, PartialEq)]
+struct Bytes(Vec<u8>);
+
+impl Serialize for Bytes {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_bytes(&self.0)
+    }
+}
+
+impl<'de> Deserialize<'de> for Bytes {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Bytes, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = Bytes;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("bytes")
+            }
+            fn visit_bytes<E>(self, v: &[u8]) -> std::result::Result<Bytes, E> {
+                Ok(Bytes(v.to_vec()))
+            }
+            fn visit_byte_buf<E>(self, v: Vec<u8>) -> std::result::Result<Bytes, E> {
+                Ok(Bytes(v))
+            }
+        }
+        d.deserialize_byte_buf(V)
+    }
+}
+
+/// Everything a checkpoint file holds.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    /// The scene file, for `merge` (which loads it again and checks the fingerprint).
+    pub scene_path: String,
+    pub scene_fingerprint: u64,
+    pub numbers: Numbers,
+    /// `--photons` of the run (a shard's total over all shards).
+    pub photons_goal: Option<u64>,
+    pub shard: Option<ShardRange>,
+    /// The run stopped on a criterion (not interrupted).
+    pub finished: bool,
+    tallies: SavedTallies,
+    direct_per_photon: f64,
+    history: Vec<SavedPoint>,
+    /// Seconds: photon pass, statistics, merging, direct light.
+    times_s: [f64; 4],
+    chunks: Vec<ChunkRecord>,
+}
+
+impl Checkpoint {
+    /// The checkpoint of a run's state after an epoch.
+    pub fn of(state: &RunState<'_>, scene_fingerprint: u64) -> Checkpoint {
+        let (mut c, cells) = Checkpoint::deferred(state, scene_fingerprint);
+        c.tallies.cells = Bytes(pack_cells(&cells));
+        c
+    }
+
+    /// [`Checkpoint::of`] with the cells still to pack (a copy, for another thread).
+    fn deferred(state: &RunState<'_>, scene_fingerprint: u64) -> (Checkpoint, Vec<CellSums>) {
+        let t = state.tallies;
+        let tallies = SavedTallies {
+            photons: t.photons,
+            rays: t.rays,
+            killed_by_bounce_cap: t.killed_by_bounce_cap,
+            history_hits: t.history_hits,
+            triangle_hits: t.triangle_hits.clone(),
+            cells: Bytes(Vec::new()),
+            direct_replicates: t.direct_replicates,
+            direct_rays: t.direct_rays,
+            dark: t.dark,
+        };
+        let c = Checkpoint {
+            scene_path: state.scene.path.display().to_string(),
+            scene_fingerprint,
+            numbers: Numbers::of(state.options),
+            photons_goal: state.options.photons,
+            shard: state.resumable.shard,
+            finished: state
+                .stop_reason
+                .is_some_and(|r| r != StopReason::Interrupted),
+            tallies,
+            direct_per_photon: state.resumable.direct_per_photon,
+            history: state
+                .history
+                .iter()
+                .map(|p| SavedPoint {
+                    elapsed_s: p.elapsed_s,
+                    photons: p.photons,
+                    rel_error: p.rel_error,
+                    forecast_s: p.forecast_s,
+                    forecast_photons: p.forecast_photons,
+                })
+                .collect(),
+            times_s: [
+                state.elapsed_s,
+                state.stats_s,
+                state.merge_s,
+                state.direct_s,
+            ],
+            chunks: state.resumable.chunks.to_vec(),
+        };
+        (c, t.cells.clone())
+    }
+
+    /// Photons traced so far (a shard's own).
+    pub fn photons(&self) -> u64 {
+        self.tallies.photons
+    }
+
+    /// The state to go on from; `None` if the cells do not read back.
+    pub fn resumed(&self) -> Option<Resumed> {
+        Some(Resumed {
+            tallies: self.tallies.tallies()?,
+            history: self
+                .history
+                .iter()
+                .map(|p| HistoryPoint {
+                    elapsed_s: p.elapsed_s,
+                    photons: p.photons,
+                    rel_error: p.rel_error,
+                    forecast_s: p.forecast_s,
+                    forecast_photons: p.forecast_photons,
+                })
+                .collect(),
+            direct_per_photon: self.direct_per_photon,
+            elapsed_s: self.times_s[0],
+            stats_s: self.times_s[1],
+            merge_s: self.times_s[2],
+            direct_s: self.times_s[3],
+            chunks: self.chunks.clone(),
+        })
+    }
+
+    /// Refuses a scene or options that would change the numbers; `what` names the file.
+    pub fn check(&self, what: &Path, scene: &Scene, options: &RunOptions) -> Result<()> {
+        let refuse = |m: String| Err(Error::input(what.display().to_string(), m));
+        if self.scene_fingerprint != fingerprint(scene) {
+            return refuse(format!(
+                "the scene differs from the checkpoint's ({} or a file it loads changed)",
+                scene.path.display()
+            ));
+        }
+        if let Some(d) = self.numbers.difference(&Numbers::of(options)) {
+            return refuse(d);
+        }
+        Ok(())
+    }
+
+    pub fn encode(&self) -> Result<Vec<u8>> {
+        let payload = postcard::to_stdvec(self)
+            .map_err(|e| Error::Unsupported(format!("checkpoint: {e}")))?;
+        let mut bytes = Vec::with_capacity(HEADER_BYTES + payload.len());
+        bytes.extend_from_slice(MAGIC);
+        bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
+        bytes.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
+        bytes.extend_from_slice(&payload);
+        Ok(bytes)
+    }
+
+    /// Reads a checkpoint; `origin` names it in errors.
+    pub fn decode(bytes: &[u8], origin: &str) -> Result<Checkpoint> {
+        let bad = |m: String| Err(Error::input(origin, m));
+        if bytes.len() < 8 || &bytes[..8] != MAGIC {
+            return bad("not a luxtally checkpoint".into());
+        }
+        if bytes.len() < HEADER_BYTES {
+            return bad(format!("truncated: {} bytes", bytes.len()));
+        }
+        let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4"));
+        let version = word(8);
+        if version != FORMAT_VERSION {
+            return bad(format!(
+                "checkpoint format {version}; this luxtally reads format {FORMAT_VERSION}"
+            ));
+        }
+        let length = u64::from_le_bytes(bytes[12..20].try_into().expect("8"));
+        let payload = &bytes[HEADER_BYTES..];
+        if payload.len() as u64 != length {
+            return bad(format!(
+                "truncated or damaged: {} of {} payload bytes",
+                payload.len(),
+                length
+            ));
+        }
+        if crc32fast::hash(payload) != word(20) {
+            return bad("corrupt: checksum mismatch".into());
+        }
+        postcard::from_bytes(payload).or_else(|e| bad(format!("corrupt: {e}")))
+    }
+
+    /// Writes `dir/checkpoint.bin` atomically: a temporary file in `dir`, synced, the
+    /// old checkpoint renamed to checkpoint.prev, the new one renamed into place, the
+    /// directory synced. Returns the bytes written.
+    pub fn save(&self, dir: &Path) -> Result<u64> {
+        let bytes = self.encode()?;
+        let path = dir.join(FILE);
+        let tmp = dir.join(format!("{FILE}.tmp"));
+        let write = || -> std::io::Result<()> {
+            let mut f = std::fs::File::create(&tmp)?;
+            f.write_all(&bytes)?;
+            f.sync_all()
+        };
+        write().map_err(|e| Error::io(&tmp, e))?;
+        if path.exists() {
+            let prev = dir.join(PREVIOUS_FILE);
+            std::fs::rename(&path, &prev).map_err(|e| Error::io(&prev, e))?;
+        }
+        std::fs::rename(&tmp, &path).map_err(|e| Error::io(&path, e))?;
+        if let Ok(d) = std::fs::File::open(dir) {
+            let _ = d.sync_all();
+        }
+        Ok(bytes.len() as u64)
+    }
+
+    /// Reads `dir/checkpoint.bin` (or checkpoint.prev when a save was cut between its
+    /// two renames).
+    pub fn load(dir: &Path) -> Result<(Checkpoint, PathBuf)> {
+        let mut path = dir.join(FILE);
+        if !path.exists() && dir.join(PREVIOUS_FILE).exists() {
+            path = dir.join(PREVIOUS_FILE);
+        }
+        let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, e))?;
+        Ok((
+            Checkpoint::decode(&bytes, &path.display().to_string())?,
+            path,
+        ))
+    }
+}
+
+/// 64-bit FNV-1a over everything of a loaded scene that changes the photons' numbers:
+/// geometry bit for bit, materials, lights (photometry included) and receivers.
+pub fn fingerprint(scene: &Scene) -> u64 {
+    let mut h = Fnv(0xcbf2_9ce4_8422_2325);
+    let g = &scene.geometry;
+    for v in [g.origin.x, g.origin.y, g.origin.z] {
+        h.eat(&v.to_le_bytes());
+    }
+    for v in &g.vertices {
+        for x in v.to_array() {
+            h.eat(&x.to_le_bytes());
+        }
+    }
+    for t in &g.triangles {
+        for i in t {
+            h.eat(&i.to_le_bytes());
+        }
+    }
+    for m in g.material.iter().chain(&g.object) {
+        h.eat(&m.to_le_bytes());
+    }
+    // Debug prints every f64 so that it reads back to the same bits.
+    h.eat(
+        format!(
+            "{:?}{:?}{:?}",
+            scene.materials, scene.lights, scene.receivers
+        )
+        .as_bytes(),
+    );
+    h.0
+}
+
+struct Fnv(u64);
+
+impl Fnv {
+    fn eat(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ b as u64).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+}
+
+/// Saves a running state's checkpoint every `period_s` and on the last epoch. The run
+/// waits only for a copy of the state; packing and writing happen on another thread
+/// (the last save is waited for).
+pub struct Checkpointer {
+    pub dir: PathBuf,
+    pub period_s: f64,
+    pub fingerprint: u64,
+    last: Instant,
+    pending: Option<std::thread::JoinHandle<Result<(f64, u64)>>>,
+    /// Seconds the run waited for the latest save, seconds its writing took, bytes.
+    pub last_cost: Option<(f64, f64, u64)>,
+    /// Seconds the run waited for saves, in all.
+    pub total_s: f64,
+    /// Saves done.
+    pub saves: u64,
+}
+
+impl Checkpointer {
+    pub fn new(dir: &Path, period_s: f64, scene: &Scene) -> Checkpointer {
+        Checkpointer {
+            dir: dir.to_path_buf(),
+            period_s,
+            fingerprint: fingerprint(scene),
+            last: Instant::now(),
+            pending: None,
+            last_cost: None,
+            total_s: 0.0,
+            saves: 0,
+        }
+    }
+
+    /// Waits for the save under way; returns its seconds and bytes.
+    fn finish_pending(&mut self) -> Result<Option<(f64, u64)>> {
+        match self.pending.take() {
+            None => Ok(None),
+            Some(h) => h
+                .join()
+                .map_err(|_| Error::Unsupported("the checkpoint writer panicked".into()))?
+                .map(Some),
+        }
+    }
+
+    /// Saves if due (or on the last epoch, then waiting until it is on disk).
+    pub fn epoch(&mut self, state: &RunState<'_>) -> Result<()> {
+        let last = state.stop_reason.is_some();
+        if !last && self.last.elapsed().as_secs_f64() < self.period_s {
+            return Ok(());
+        }
+        let t = Instant::now();
+        let mut written = self.finish_pending()?;
+        let (mut c, cells) = Checkpoint::deferred(state, self.fingerprint);
+        let dir = self.dir.clone();
+        let handle = std::thread::spawn(move || {
+            let t = Instant::now();
+            c.tallies.cells = Bytes(pack_cells(&cells));
+            drop(cells);
+            let bytes = c.save(&dir)?;
+            Ok((t.elapsed().as_secs_f64(), bytes))
+        });
+        self.pending = Some(handle);
+        if last {
+            written = self.finish_pending()?;
+        }
+        let waited = t.elapsed().as_secs_f64();
+        self.total_s += waited;
+        self.saves += 1;
+        if let Some((s, bytes)) = written {
+            self.last_cost = Some((if last { waited - s } else { waited }, s, bytes));
+        }
+        self.last = Instant::now();
+        Ok(())
+    }
+}
+
+/// Merges complete shards (any order) into the run they split: every chunk folded in
+/// global chunk order, then the direct light computed for the total photon count.
+/// `options` must carry the shards' numbers (seed, estimator, backend).
+pub fn merge(
+    scene: &Scene,
+    options: &RunOptions,
+    caster: &dyn RayCaster,
+    setup: Instant,
+    mut shards: Vec<(PathBuf, Checkpoint)>,
+) -> Result<RunResult> {
+    let Some((first_path, first)) = shards.first() else {
+        return Err(Error::input("merge", "no shard directories given"));
+    };
+    let origin = |p: &Path| p.display().to_string();
+    let count = match first.shard {
+        Some(s) => s.count,
+        None => {
+            return Err(Error::input(
+                origin(first_path),
+                "not a shard's checkpoint (run with --shard I/N)",
+            ))
+        }
+    };
+    let goal = first.photons_goal;
+    let print = fingerprint(scene);
+    for (path, c) in &shards {
+        let Some(s) = c.shard else {
+            return Err(Error::input(origin(path), "not a shard's checkpoint"));
+        };
+        if s.count != count || c.photons_goal != goal {
+            return Err(Error::input(
+                origin(path),
+                format!(
+                    "shard {}/{} of {:?} photons does not belong with shard {}/{count} of {goal:?}",
+                    s.index, s.count, c.photons_goal, 0
+                ),
+            ));
+        }
+        if c.scene_fingerprint != print {
+            return Err(Error::input(
+                origin(path),
+                format!("was made from another scene than {}", scene.path.display()),
+            ));
+        }
+        if let Some(d) = c.numbers.difference(&Numbers::of(options)) {
+            return Err(Error::input(origin(path), d));
+        }
+        if c.photons() != s.end_photon - s.first_photon {
+            return Err(Error::input(
+                origin(path),
+                format!(
+                    "shard {}/{} is incomplete: {} of {} photons (resume it first)",
+                    s.index,
+                    s.count,
+                    c.photons(),
+                    s.end_photon - s.first_photon
+                ),
+            ));
+        }
+    }
+    shards.sort_by_key(|(_, c)| c.shard.map(|s| s.index));
+    for (k, (path, c)) in shards.iter().enumerate() {
+        let index = c.shard.map_or(0, |s| s.index);
+        if index as usize != k {
+            let missing = if (index as usize) < k {
+                index
+            } else {
+                k as u32
+            };
+            return Err(Error::input(
+                origin(path),
+                format!(
+                    "shard {missing}/{count} is {}",
+                    if (index as usize) < k {
+                        "given twice"
+                    } else {
+                        "missing"
+                    }
+                ),
+            ));
+        }
+    }
+    if shards.len() != count as usize {
+        return Err(Error::input(
+            "merge",
+            format!("{} of {count} shards given", shards.len()),
+        ));
+    }
+
+    let threads = options.threads.max(1);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
+    let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
+    let total_flux_lm = tracer.emitters.total_flux_lm;
+    let mut tallies = Tallies::new(scene.geometry.triangle_count(), tracer.cell_count());
+    tallies.dark = !(total_flux_lm > 0.0);
+    let direct = DirectLight {
+        emitters: &tracer.emitters,
+        caster,
+        slack: tracer.receiver_slack,
+        seed: options.seed,
+    };
+    let mut schedule = DirectSchedule { per_photon: 0.0 };
+    let mut direct_s = add_direct(&tracer, &direct, &mut tallies, PILOT_REPLICATES, &pool);
+    let run_setup = RunSetup {
+        setup_s: setup.elapsed().as_secs_f64(),
+        total_flux_lm,
+        light_flux_lm: tracer.emitters.flux_lm.clone(),
+        bounce_cap: tracer.max_bounces,
+        threads,
+        next_event: tracer.receivers.iter().map(|g| g.next_event).collect(),
+    };
+    let start = Instant::now();
+    let mut chunk = ChunkTally::default();
+    let (mut elapsed_s, mut stats_s) = (0.0, 0.0);
+    for (_, c) in &shards {
+        let t = &c.tallies;
+        // Integers add in any order.
+        tallies.killed_by_bounce_cap += t.killed_by_bounce_cap;
+        for (a, b) in tallies.history_hits.iter_mut().zip(t.history_hits) {
+            *a += b;
+        }
+        for (a, b) in tallies.triangle_hits.iter_mut().zip(&t.triangle_hits) {
+            *a += b;
+        }
+        for record in &c.chunks {
+            record.to_chunk(&mut chunk);
+            tallies.accumulate(&chunk, record.photons as u64);
+            if tallies.photons.is_power_of_two() && tallies.photons >= CHUNK_PHOTONS {
+                direct_s += top_up_direct(&tracer, &direct, &mut tallies, &mut schedule, &pool);
+            }
+        }
+        elapsed_s += c.times_s[0];
+        stats_s += c.times_s[1];
+    }
+    direct_s += top_up_direct(&tracer, &direct, &mut tallies, &mut schedule, &pool);
+    let target = match &options.target {
+        Some(t) => Target::parse(t, &scene.receivers)?,
+        None if scene.receivers.is_empty() => Target::Global,
+        None => Target::Receiver { index: 0 },
+    };
+    let error = crate::run::target_error(scene, &target, &tallies, total_flux_lm, options.absolute);
+    let history = vec![HistoryPoint {
+        elapsed_s,
+        photons: tallies.photons,
+        rel_error: error,
+        forecast_s: None,
+        forecast_photons: None,
+    }];
+    Ok(RunResult {
+        setup: run_setup,
+        tallies,
+        history,
+        forecast: None,
+        target,
+        stop_reason: StopReason::Photons,
+        // The shards' photon passes added up (machine seconds), plus the merge.
+        elapsed_s: elapsed_s + start.elapsed().as_secs_f64(),
+        stats_s,
+        merge_s: start.elapsed().as_secs_f64(),
+        direct_s,
+        direct_per_photon: schedule.per_photon,
+        shard: None,
+        chunks: Vec::new(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_cover_the_chunks_without_gap_or_overlap() {
+        let total = 10 * CHUNK_PHOTONS + 17;
+        let mut next = 0;
+        for i in 0..3 {
+            let s = ShardRange::new(i, 3, total).unwrap();
+            assert_eq!(s.first_photon, next);
+            assert_eq!(s.first_photon % CHUNK_PHOTONS, 0);
+            next = s.end_photon;
+        }
+        assert_eq!(next, total);
+        assert!(ShardRange::new(3, 3, total).is_err());
+        assert!(ShardRange::new(0, 12, total).is_err());
+        assert!(ShardRange::parse("1/x", total).is_err());
+    }
+
+    #[test]
+    fn a_damaged_checkpoint_is_refused_in_one_line() {
+        let c = Checkpoint {
+            scene_path: "s.toml".into(),
+            scene_fingerprint: 7,
+            numbers: Numbers {
+                seed: 1,
+                estimator: None,
+                backend: "embree".into(),
+            },
+            photons_goal: Some(10),
+            shard: None,
+            finished: false,
+            tallies: SavedTallies::of(&Tallies::new(2, 3)),
+            direct_per_photon: 0.25,
+            history: vec![],
+            times_s: [1.0; 4],
+            chunks: vec![],
+        };
+        let bytes = c.encode().unwrap();
+        assert_eq!(Checkpoint::decode(&bytes, "c").unwrap(), c);
+        let truncated = Checkpoint::decode(&bytes[..bytes.len() - 3], "c").unwrap_err();
+        assert!(truncated.to_string().contains("truncated"), "{truncated}");
+        let mut flipped = bytes.clone();
+        *flipped.last_mut().unwrap() ^= 1;
+        let corrupt = Checkpoint::decode(&flipped, "c").unwrap_err();
+        assert!(corrupt.to_string().contains("checksum"), "{corrupt}");
+        let mut old = bytes.clone();
+        old[8] = 9;
+        assert!(Checkpoint::decode(&old, "c")
+            .unwrap_err()
+            .to_string()
+            .contains("format 9"));
+        assert!(Checkpoint::decode(b"hello", "c").is_err());
+    }
+}
