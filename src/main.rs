@@ -899,6 +899,15 @@ fn info_command(path: &Path) -> Result<()> {
             m.specular_transmittance,
             m.ior
         );
+        if m.glossy_reflectance + m.glossy_transmittance > 0.0 {
+            println!(
+                "    glossy reflector {} rough glass {} (roughness {}, α {})",
+                m.glossy_reflectance,
+                m.glossy_transmittance,
+                m.roughness,
+                m.roughness * m.roughness
+            );
+        }
     }
     for l in &scene.lights {
         match &l.kind {

@@ -83,7 +83,8 @@ fn glossy_reflection_is_reciprocal() {
 
 #[test]
 fn rough_refraction_obeys_the_generalised_reciprocity() {
-    // Flux form: f(wo, wi)·n_i²... here f(out→in) = f(in→out)·η² for η = 1.5.
+    // In the flux form (no 1/η² radiance factor) refraction is reciprocal up to η²:
+    // f(wo outside, wi inside) = η²·f(wi, wo) for η = 1.5.
     let mut rng = Pcg32::seed_from_u64(8);
     let b = Bsdf::new(&material(0.0, 1.0, 0.5));
     let eta = 1.5;

@@ -38,7 +38,7 @@ pub const MIN_FILE_ROUGHNESS: f64 = 1e-3;
 pub fn mtl_to_material(kd: [f64; 3], ks: Option<[f64; 3]>, ns: Option<f64>) -> (f64, f64, f64) {
     let diffuse = rgb_to_reflectance(kd);
     let ks = ks.map_or(0.0, rgb_to_reflectance).clamp(0.0, 1.0);
-    if !(ks > 0.0) {
+    if ks.is_nan() || ks <= 0.0 {
         return (diffuse, 0.0, 1.0);
     }
     let ns = ns.unwrap_or(0.0).max(0.0);

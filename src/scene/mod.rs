@@ -282,7 +282,7 @@ pub struct Camera {
     pub interpolate: bool,
     /// n: an area source is sampled on an n × n jittered grid per shading point.
     pub area_light_samples: u32,
-    /// Specular bounces an eye ray may take.
+    /// Specular and glossy bounces an eye ray may take.
     pub max_depth: u32,
 }
 

@@ -569,7 +569,7 @@ pub fn dielectric_sample(wo: DVec3, alpha: f64, ior: f64, u: [f64; 3]) -> Option
     };
     let f = dielectric_f(wo, wi, alpha, ior);
     let pdf = dielectric_pdf(wo, wi, alpha, ior);
-    if !(pdf > 0.0) || !(f > 0.0) {
+    if !(pdf > 0.0 && f > 0.0) {
         return None;
     }
     Some((wi, f * wi.z.abs() / pdf))

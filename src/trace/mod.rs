@@ -357,7 +357,7 @@ impl<'a> Tracer<'a> {
             if bsdf.glossy_connectable() {
                 intensity += flux * bsdf.f_glossy(wo, c.dir, n) * cos_s.abs();
             }
-            if !(intensity > 0.0) {
+            if intensity.is_nan() || intensity <= 0.0 {
                 continue;
             }
             let score = intensity * c.factor / r.connections as f64;
