@@ -4,7 +4,7 @@
 //! repeat on the continuations until none is left or the depth limit is reached.
 
 use super::map::IndirectField;
-use crate::accel::{HitBatch, RayBatch, RayCaster, NO_HIT};
+use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng::photon_stream;
 use crate::scene::{Camera, Material, Scene};
 use crate::trace::emit::{Emitter, Emitters};
@@ -246,25 +246,26 @@ impl<'a> EyePass<'a> {
         .normalize();
         let t_hit = s.hits.t[k] as f64;
         sample_l[sample as usize] += weight * self.area_light_seen(o, dir, t_hit);
-        let tri = s.hits.tri[k];
-        if tri == NO_HIT {
+        let Some(surface) = s.hits.surface(k, &self.scene.geometry) else {
             return;
-        }
-        let g = &self.scene.geometry;
-        let t = tri as usize;
-        let m: &Material = &self.scene.materials[g.material[t] as usize];
-        let normal = g.normal[t];
-        let n = normal.as_dvec3();
+        };
+        let m: &Material = &self.scene.materials[surface.material as usize];
+        let n = surface.normal.as_dvec3();
         let back = dir.dot(n) > 0.0;
         // Normal on the eye's side.
         let facing = if back { -n } else { n };
-        let [a, b, c] = g.triangles[t].map(|i| g.vertices[i as usize]);
         let (u, v) = (s.hits.u[k], s.hits.v[k]);
-        let p = a + (b - a) * u + (c - a) * v;
+        let p = surface.point;
 
         if m.reflectance > 0.0 || m.transmittance > 0.0 {
-            let e_seen = self.field.illuminance_lx(t, back, u, v);
-            let e_other = self.field.illuminance_lx(t, !back, u, v);
+            // Unmapped (instanced) objects have no indirect map: direct light only.
+            let (e_seen, e_other) = match surface.mapped {
+                Some(t) => (
+                    self.field.illuminance_lx(t as usize, back, u, v),
+                    self.field.illuminance_lx(t as usize, !back, u, v),
+                ),
+                None => (0.0, 0.0),
+            };
             sample_l[sample as usize] +=
                 weight * (m.reflectance * e_seen + m.transmittance * e_other) / PI;
             self.queue_direct(p, facing, m, (weight, sample, stream), s);
