@@ -131,6 +131,11 @@ struct RunArgs {
     /// Rewrite report.html every SECONDS during the run (the page reloads itself).
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     report_every: Option<f64>,
+    /// Files to write besides summary.json, comma-separated: receivers, map
+    /// (scene_map.ply), report, indirect (the map render --from reuses), render; or all,
+    /// none (default: all).
+    #[arg(long, value_name = "LIST")]
+    outputs: Option<String>,
 }
 
 #[derive(clap::Args)]
@@ -336,18 +341,30 @@ fn photon_pass(
     }
     let state = result.state(scene, options);
     save_summary(out, &state)?;
-    luxtally::output::write_run_files(out, &state)?;
+    let outputs = outputs_of(args)?;
+    luxtally::output::write_run_files_with(out, &state, outputs)?;
     if let Some(e) = observer.save_error {
         return Err(e);
     }
-    IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
-        .save(&out.join(MAP_FILE), scene)?;
+    if outputs.indirect {
+        IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
+            .save(&out.join(MAP_FILE), scene)?;
+    }
     Ok(result)
+}
+
+/// `--outputs`, all files when absent.
+fn outputs_of(args: &RunArgs) -> Result<luxtally::output::Outputs> {
+    args.outputs.as_deref().map_or(
+        Ok(luxtally::output::Outputs::ALL),
+        luxtally::output::Outputs::parse,
+    )
 }
 
 fn run_command(args: RunArgs) -> Result<()> {
     let scene = luxtally::scene::load(&args.scene)?;
     let options = run_options(&args, &scene)?;
+    outputs_of(&args)?;
     let out = out_dir(args.out.as_deref(), &scene)?;
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
@@ -360,6 +377,7 @@ fn run_command(args: RunArgs) -> Result<()> {
 fn render_command(args: RenderArgs) -> Result<()> {
     let mut scene = luxtally::scene::load(&args.run.scene)?;
     let options = run_options(&args.run, &scene)?;
+    let outputs = outputs_of(&args.run)?;
     // Checked before the photon pass, which may be long.
     let mut camera = render::camera_of(&scene)?.clone();
     if args.no_interpolation {
@@ -385,7 +403,9 @@ fn render_command(args: RenderArgs) -> Result<()> {
         options.seed,
         options.threads,
     )?;
-    render::output::write_all(&r.image, &out)?;
+    if outputs.render {
+        render::output::write_all(&r.image, &out)?;
+    }
     if !args.run.quiet {
         println!(
             "render: {}×{} px, {} samples/px, {} eye rays + {} shadow rays in {:.2} s \

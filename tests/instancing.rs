@@ -532,3 +532,58 @@ estimator = "track"
     let mean = r.values.iter().sum::<f64>() / r.values.len() as f64;
     assert!(mean > 5.0 && mean < 99.0, "mean {mean}");
 }
+
+fn luxtally(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_luxtally"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("binary runs")
+}
+
+/// `--outputs receivers,report` writes summary.json, the receivers' files and the
+/// report, and neither scene_map.ply nor the indirect map; a bad name is one line.
+#[test]
+fn outputs_choose_the_files_a_run_writes() {
+    let dir = std::env::temp_dir().join(format!("luxtally-outputs-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = luxtally(&[
+        "run",
+        "scenes/office.toml",
+        "--photons",
+        "20000",
+        "--quiet",
+        "--outputs",
+        "receivers,report",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(dir.join("summary.json").is_file());
+    assert!(dir.join("report.html").is_file());
+    let receivers: Vec<_> = std::fs::read_dir(dir.join("receivers"))
+        .expect("receivers/ written")
+        .collect();
+    assert!(!receivers.is_empty());
+    assert!(!dir.join("scene_map.ply").exists(), "scene_map.ply written");
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        names.len(),
+        3,
+        "only summary, report, receivers/: {names:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+
+    let bad = luxtally(&["run", "scenes/office.toml", "--outputs", "receivers,maps"]);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(1), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("--outputs") && err.contains("`maps`"), "{err}");
+}
