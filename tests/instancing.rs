@@ -587,3 +587,51 @@ fn outputs_choose_the_files_a_run_writes() {
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(err.contains("--outputs") && err.contains("`maps`"), "{err}");
 }
+
+/// `map = false` on an ordinary object: it shadows the floor but holds no tallies, so
+/// the global statistics cover the floor alone; `map = true` (the default) adds its
+/// triangles and area.
+#[test]
+fn unmapped_objects_shadow_but_are_left_out_of_the_scene_map() {
+    let scene = |map: &str| {
+        format!(
+            r#"
+[materials]
+grey = {{ reflectance = 0.5 }}
+
+[[objects]]
+shape = "rect"
+corner = [-5, -5, 0]
+u = [10, 0, 0]
+v = [0, 10, 0]
+material = "grey"
+
+[[objects]]
+shape = "box"
+min = [-1, -1, 1]
+max = [1, 1, 2]
+material = "grey"
+{map}
+
+[[lights]]
+type = "directional"
+direction = [0, 0, -1]
+illuminance_lx = 100
+"#
+        )
+    };
+    let unmapped = run(&scene("map = false"), 100_000);
+    let mapped = run(&scene(""), 100_000);
+    assert_eq!(unmapped.global.triangles, 2);
+    assert!((unmapped.global.area_m2 - 100.0).abs() < 1e-9);
+    assert_eq!(mapped.global.triangles, 14);
+    assert!((mapped.global.area_m2 - 116.0).abs() < 1e-9);
+    // The floor's mean: 96 % lit at 100 lx (plus a little light from the box's bottom);
+    // without the box's shadow it would be 100 lx.
+    let e = unmapped.global.mean_illuminance_lx;
+    let s = unmapped.global.mean_sigma_lx;
+    assert!(
+        e > 96.0 - 5.0 * s && e < 100.0 - 1.0,
+        "floor mean {e} ± {s}"
+    );
+}
