@@ -66,6 +66,26 @@ enum Command {
         #[arg(long, default_value = "embree")]
         backend: String,
     },
+    /// Scale: set-up time, peak memory, Mrays/s and photons/s for 10²…10⁶ instances of a
+    /// mesh against 10⁴…10⁷ flattened triangles (one child process per case).
+    BenchScale {
+        /// The instanced mesh.
+        #[arg(long, default_value = "scenes/meshes/stanford-bunny.obj")]
+        mesh: PathBuf,
+        #[arg(long, default_value_t = 200_000)]
+        photons: u64,
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Largest instance count (a power of ten).
+        #[arg(long, default_value_t = 1_000_000)]
+        max_instances: u64,
+        /// Largest flattened triangle count (a power of ten).
+        #[arg(long, default_value_t = 10_000_000)]
+        max_triangles: u64,
+        /// Run one case in this process (instanced:N or flattened:N) and print its JSON.
+        #[arg(long)]
+        case: Option<String>,
+    },
     /// Time to accuracy on a receiver: error against time, measured and forecast, time
     /// to 5, 2 and 1 %, FOM, forecast accuracy and the cost of the statistics.
     BenchAccuracy {
@@ -209,6 +229,20 @@ fn main() -> ExitCode {
             print!("{table}");
             Ok(())
         })(),
+        Command::BenchScale {
+            mesh,
+            photons,
+            threads,
+            max_instances,
+            max_triangles,
+            case,
+        } => bench_scale_command(
+            &mesh,
+            photons,
+            threads.unwrap_or_else(all_cores),
+            (max_instances, max_triangles),
+            case.as_deref(),
+        ),
         Command::BenchAccuracy {
             scene,
             receiver,
@@ -594,6 +628,54 @@ fn photometry_command(file: &Path, out: Option<PathBuf>) -> Result<()> {
         println!("{line}");
     }
     println!("polar diagram: {}", out.display());
+    Ok(())
+}
+
+/// `bench-scale`: each case in a child process of this binary (its own peak RSS), then
+/// the table; with `--case`, that case here, as one JSON line.
+fn bench_scale_command(
+    mesh: &Path,
+    photons: u64,
+    threads: usize,
+    (max_instances, max_triangles): (u64, u64),
+    case: Option<&str>,
+) -> Result<()> {
+    use luxtally::bench::{ScaleCase, ScaleResult};
+    if let Some(case) = case {
+        let r = luxtally::bench::bench_scale_case(case.parse()?, mesh, photons, threads)?;
+        let line = serde_json::to_string(&r)
+            .map_err(|e| luxtally::Error::Unsupported(format!("bench-scale: {e}")))?;
+        println!("{line}");
+        return Ok(());
+    }
+    let powers = |lo: u64, hi: u64| {
+        std::iter::successors(Some(lo), |n| n.checked_mul(10)).take_while(move |n| *n <= hi)
+    };
+    let cases: Vec<ScaleCase> = powers(100, max_instances)
+        .map(ScaleCase::Instanced)
+        .chain(powers(10_000, max_triangles).map(ScaleCase::Flattened))
+        .collect();
+    let exe = std::env::current_exe().map_err(|e| luxtally::Error::io("current_exe", e))?;
+    let mut results = Vec::new();
+    for case in cases {
+        eprintln!("bench-scale: {case} …");
+        let out = std::process::Command::new(&exe)
+            .args(["bench-scale", "--case", &case.to_string(), "--photons"])
+            .arg(photons.to_string())
+            .args(["--threads", &threads.to_string(), "--mesh"])
+            .arg(mesh)
+            .output()
+            .map_err(|e| luxtally::Error::io(&exe, e))?;
+        let text = String::from_utf8_lossy(&out.stdout);
+        match serde_json::from_str::<ScaleResult>(text.trim()) {
+            Ok(r) if out.status.success() => results.push(r),
+            _ => eprintln!(
+                "bench-scale: {case} failed: {}",
+                String::from_utf8_lossy(&out.stderr).trim()
+            ),
+        }
+    }
+    print!("{}", luxtally::bench::scale_table(&results, threads));
     Ok(())
 }
 
