@@ -635,3 +635,66 @@ illuminance_lx = 100
         "floor mean {e} ± {s}"
     );
 }
+
+/// The eye pass sees instances: the top of an instanced (mirrored) box straight under a
+/// point source reads L = ρ·I/(π r²) (direct light only: it holds no indirect map).
+#[test]
+fn render_shades_instanced_surfaces_with_direct_light() {
+    for scale in ["1", "[-1, 1, 1]"] {
+        let text = format!(
+            r#"
+[materials]
+grey = {{ reflectance = 0.5 }}
+
+[[objects]]
+shape = "rect"
+corner = [-5, -5, 0]
+u = [10, 0, 0]
+v = [0, 10, 0]
+material = "grey"
+
+[[objects]]
+shape = "box"
+min = [-1, -1, 0]
+max = [1, 1, 1]
+material = "grey"
+instances = [{{ scale = {scale} }}]
+
+[[lights]]
+type = "point"
+position = [0, 0, 5]
+intensity_cd = 1000
+
+[camera]
+position = [0, 0.001, 4]
+look_at = [0, 0, 0]
+up = [0, 1, 0]
+fov_deg = 1
+resolution = [3, 3]
+"#
+        );
+        let s = load(&text);
+        let options = common::options(&s, 20_000, 2, Backend::Embree);
+        let result = luxtally::run::run(
+            &s,
+            &options,
+            &std::sync::atomic::AtomicBool::new(false),
+            &mut (),
+        )
+        .expect("runs");
+        let map = luxtally::render::IndirectMap::from_tallies(
+            &s,
+            &result.tallies,
+            result.setup.total_flux_lm,
+        );
+        let caster = accel::build(Backend::Embree, &s.geometry).expect("builds");
+        let camera = s.camera.as_ref().unwrap();
+        let r = luxtally::render::render(&s, camera, &map, caster.as_ref(), 1, 2).expect("renders");
+        let centre = r.image.luminance_cdm2[4];
+        let exact = 0.5 * 1000.0 / (std::f64::consts::PI * 16.0);
+        assert!(
+            (centre - exact).abs() < 0.01 * exact,
+            "scale {scale}: {centre} cd/m² vs {exact}"
+        );
+    }
+}
