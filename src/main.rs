@@ -584,6 +584,15 @@ fn info_command(path: &Path) -> Result<()> {
         g.triangle_count(),
         g.total_area_m2()
     );
+    if !g.instanced.is_empty() {
+        println!(
+            "  unmapped: {} instances of {} prototypes ({} triangles stored, {} if flattened)",
+            g.instanced.instances.len(),
+            g.instanced.prototypes.len(),
+            g.instanced.stored_triangle_count(),
+            g.instanced.flattened_triangle_count()
+        );
+    }
     if let Some((lo, hi)) = g.world_bounds() {
         println!("  bounds {:.3?} → {:.3?}", lo.to_array(), hi.to_array());
     }

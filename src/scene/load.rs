@@ -163,7 +163,8 @@ fn validate_material(m: &Material, at: &str) -> Result<()> {
 /// is both the code space and ~100 GiB.
 pub const MAX_MAPPED_TRIANGLES: u64 = (1 << 29) - 1;
 
-/// Instances: each is an Embree geometry of a few hundred bytes; 2²⁴ is several GiB.
+/// Instances: ~0.9 KiB each measured with Embree (BENCHMARKS.md, bench-scale), so 2²⁴ is
+/// ~15 GiB.
 pub const MAX_INSTANCES: u64 = 1 << 24;
 
 /// Collects every mapped object's triangles in world space and every unmapped object's
