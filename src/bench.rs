@@ -650,3 +650,184 @@ pub fn bench_accuracy(
     }
     Ok(out)
 }
+
+/// One configuration of `luxtally bench-scale`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ScaleCase {
+    /// This many instances of the mesh (`map = false`) on a grid, over a mapped floor.
+    Instanced(u64),
+    /// The procedural scene with at least this many (mapped) triangles.
+    Flattened(u64),
+}
+
+impl std::str::FromStr for ScaleCase {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        let bad = || Error::input("--case", format!("`{s}` is not instanced:N or flattened:N"));
+        let (kind, n) = s.split_once(':').ok_or_else(bad)?;
+        let n: u64 = n.parse().map_err(|_| bad())?;
+        match kind {
+            "instanced" => Ok(ScaleCase::Instanced(n)),
+            "flattened" => Ok(ScaleCase::Flattened(n)),
+            _ => Err(bad()),
+        }
+    }
+}
+
+impl std::fmt::Display for ScaleCase {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ScaleCase::Instanced(n) => write!(f, "instanced:{n}"),
+            ScaleCase::Flattened(n) => write!(f, "flattened:{n}"),
+        }
+    }
+}
+
+/// What one bench-scale case measured (one process per case, so that the peak RSS is
+/// the case's own).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct ScaleResult {
+    pub case: String,
+    pub instances: u64,
+    /// Triangles held (mapped triangles plus each prototype once).
+    pub triangles_stored: u64,
+    /// Triangles traced, as if flattened.
+    pub triangles_traced: u64,
+    /// Scene load (or generation) plus acceleration-structure build, wall seconds.
+    pub setup_s: f64,
+    /// `VmHWM` at the end, MiB.
+    pub peak_rss_mib: f64,
+    /// Incoherent random closest-hit rays through the scene's bounds, wall time.
+    pub mrays_per_s: f64,
+    /// Photon pass (track estimator), wall time.
+    pub photons_per_s: f64,
+}
+
+/// The instanced scene: `n` copies of `mesh` (y up, rotated to z up) on a square-ish
+/// grid 0.25 m apart, a mapped grey floor under them and a point light above.
+pub fn instanced_scene(mesh: &Path, n: u64) -> Result<crate::scene::Scene> {
+    let nx = (n as f64).sqrt().ceil().max(1.0) as u64;
+    let ny = n.div_ceil(nx).max(1);
+    let (w, d) = (nx as f64 * 0.25, ny as f64 * 0.25);
+    let text = format!(
+        r#"name = "instanced {n}"
+[materials]
+grey = {{ reflectance = 0.5 }}
+
+[[objects]]
+shape = "rect"
+corner = [-0.5, -0.5, -0.01]
+u = [{w1}, 0, 0]
+v = [0, {d1}, 0]
+material = "grey"
+
+[[objects]]
+file = "{mesh}"
+material = "grey"
+rotate_deg = [90, 0, 0]
+grid = {{ count = [{nx}, {ny}], spacing = [0.25, 0.25] }}
+
+[[lights]]
+type = "point"
+position = [{cx}, {cy}, {h}]
+intensity_cd = 1000
+"#,
+        w1 = w + 1.0,
+        d1 = d + 1.0,
+        mesh = mesh.display(),
+        cx = w / 2.0,
+        cy = d / 2.0,
+        h = 0.2 * w.max(d) + 0.5,
+    );
+    crate::scene::load_str(&text, Path::new("."), "bench-scale.toml")
+}
+
+/// Runs one case in this process: set-up, raw rays, photons, peak RSS.
+pub fn bench_scale_case(
+    case: ScaleCase,
+    mesh: &Path,
+    photons: u64,
+    threads: usize,
+) -> Result<ScaleResult> {
+    use crate::run::{run, RunOptions};
+    use crate::scene::Estimator;
+    use std::sync::atomic::AtomicBool;
+    let start = Instant::now();
+    let scene = match case {
+        ScaleCase::Instanced(n) => instanced_scene(mesh, n)?,
+        ScaleCase::Flattened(n) => lit_scene("flattened", procedural_geometry(n as usize)),
+    };
+    let backend = crate::accel::Backend::Embree;
+    let caster = crate::accel::build(backend, &scene.geometry)?;
+    let setup_s = start.elapsed().as_secs_f64();
+    let g = &scene.geometry;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
+    let (lo, hi) = local_bounds(g);
+    let (ilo, ihi) = g.instanced.bounds;
+    let (lo, hi) = if g.instanced.is_empty() {
+        (lo, hi)
+    } else {
+        (lo.min(ilo), hi.max(ihi))
+    };
+    let chunks = split(&random_rays(lo, hi, 200_000, 7), CHUNK);
+    let mrays_per_s = rust_mrays(
+        caster.as_ref(),
+        caster.default_intersect_api(),
+        &chunks,
+        false,
+        Some(&pool),
+        2,
+    );
+    let options = RunOptions {
+        photons: Some(photons),
+        threads,
+        backend,
+        estimator: Some(Estimator::Track),
+        ..RunOptions::from_scene(&scene)
+    };
+    let result = run(&scene, &options, &AtomicBool::new(false), &mut ())?;
+    let instances = g.instanced.instances.len() as u64;
+    Ok(ScaleResult {
+        case: case.to_string(),
+        instances,
+        triangles_stored: g.triangle_count() as u64 + g.instanced.stored_triangle_count() as u64,
+        triangles_traced: g.triangle_count() as u64 + g.instanced.flattened_triangle_count(),
+        setup_s,
+        peak_rss_mib: memory_mib().1,
+        mrays_per_s,
+        photons_per_s: result.tallies.photons as f64 / result.elapsed_s,
+    })
+}
+
+/// The bench-scale table (Markdown) from per-case results.
+pub fn scale_table(results: &[ScaleResult], threads: usize) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "| case | instances | triangles stored | triangles traced | set-up s | peak RSS MiB | Mrays/s | photons/s |"
+    );
+    let _ = writeln!(out, "|---|---:|---:|---:|---:|---:|---:|---:|");
+    for r in results {
+        let _ = writeln!(
+            out,
+            "| {} | {} | {} | {:.3e} | {:.2} | {:.0} | {:.2} | {:.2} M |",
+            r.case,
+            r.instances,
+            r.triangles_stored,
+            r.triangles_traced as f64,
+            r.setup_s,
+            r.peak_rss_mib,
+            r.mrays_per_s,
+            r.photons_per_s / 1e6
+        );
+    }
+    let _ = writeln!(
+        out,
+        "\nEmbree, {threads} threads; one process per case (peak RSS = its VmHWM); rays: 200,000 \
+         incoherent random closest-hit rays through the bounds; photons: track estimator."
+    );
+    out
+}

@@ -85,6 +85,26 @@ enum Command {
         #[arg(long, default_value = "embree")]
         backend: String,
     },
+    /// Scale: set-up time, peak memory, Mrays/s and photons/s for 10²…10⁶ instances of a
+    /// mesh against 10⁴…10⁷ flattened triangles (one child process per case).
+    BenchScale {
+        /// The instanced mesh.
+        #[arg(long, default_value = "scenes/meshes/stanford-bunny.obj")]
+        mesh: PathBuf,
+        #[arg(long, default_value_t = 200_000)]
+        photons: u64,
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Largest instance count (a power of ten).
+        #[arg(long, default_value_t = 1_000_000)]
+        max_instances: u64,
+        /// Largest flattened triangle count (a power of ten).
+        #[arg(long, default_value_t = 10_000_000)]
+        max_triangles: u64,
+        /// Run one case in this process (instanced:N or flattened:N) and print its JSON.
+        #[arg(long)]
+        case: Option<String>,
+    },
     /// Time to accuracy on a receiver: error against time, measured and forecast, time
     /// to 5, 2 and 1 %, FOM, forecast accuracy and the cost of the statistics.
     BenchAccuracy {
@@ -165,6 +185,11 @@ struct RunArgs {
     /// with `luxtally merge`.
     #[arg(long, value_name = "I/N")]
     shard: Option<String>,
+    /// Files to write besides summary.json, comma-separated: receivers, map
+    /// (scene_map.ply), report, indirect (the map render --from reuses), render; or all,
+    /// none (default: all).
+    #[arg(long, value_name = "LIST")]
+    outputs: Option<String>,
 }
 
 #[derive(clap::Args)]
@@ -247,6 +272,20 @@ fn main() -> ExitCode {
             print!("{}", table?);
             Ok(())
         })(),
+        Command::BenchScale {
+            mesh,
+            photons,
+            threads,
+            max_instances,
+            max_triangles,
+            case,
+        } => bench_scale_command(
+            &mesh,
+            photons,
+            threads.unwrap_or_else(all_cores),
+            (max_instances, max_triangles),
+            case.as_deref(),
+        ),
         Command::BenchAccuracy {
             scene,
             receiver,
@@ -462,22 +501,35 @@ fn photon_pass(
         }
         return Ok(result);
     }
-    write_outputs(out, scene, options, &result)?;
+    write_outputs(out, scene, options, &result, outputs_of(args)?)?;
     Ok(result)
 }
 
-/// summary.json, the run files and the indirect map of a finished run.
+/// `--outputs`, all files when absent.
+fn outputs_of(args: &RunArgs) -> Result<luxtally::output::Outputs> {
+    args.outputs.as_deref().map_or(
+        Ok(luxtally::output::Outputs::ALL),
+        luxtally::output::Outputs::parse,
+    )
+}
+
+/// summary.json, the run files `outputs` asks for and the indirect map of a finished
+/// run.
 fn write_outputs(
     out: &Path,
     scene: &Scene,
     options: &RunOptions,
     result: &RunResult,
+    outputs: luxtally::output::Outputs,
 ) -> Result<()> {
     let state = result.state(scene, options);
     save_summary(out, &state)?;
-    luxtally::output::write_run_files(out, &state)?;
-    IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
-        .save(&out.join(MAP_FILE), scene)
+    luxtally::output::write_run_files_with(out, &state, outputs)?;
+    if outputs.indirect {
+        IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
+            .save(&out.join(MAP_FILE), scene)?;
+    }
+    Ok(())
 }
 
 /// `--resume` and `--shard`: the checkpoint's state, checked against the scene and
@@ -588,7 +640,13 @@ fn merge_command(
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
     let result = luxtally::checkpoint::merge(&scene, &options, caster.as_ref(), setup, shards)?;
-    write_outputs(out, &scene, &options, &result)?;
+    write_outputs(
+        out,
+        &scene,
+        &options,
+        &result,
+        luxtally::output::Outputs::ALL,
+    )?;
     println!(
         "merged {} shards: {} photons; results in {}",
         dirs.len(),
@@ -602,6 +660,7 @@ fn run_command(args: RunArgs) -> Result<()> {
     let budget = budget_for(&args)?;
     let scene = luxtally::scene::load(&args.scene)?;
     let options = run_options(&args, &scene)?;
+    outputs_of(&args)?;
     limits::check_run(&scene, &options, None, true, &budget)?;
     let dir = out_dir(args.out.as_deref().or(args.resume.as_deref()), &scene)?;
     dir.keep_on(run_into(&args, &scene, &options, &dir.path))
@@ -642,6 +701,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let budget = budget_for(&args.run)?;
     let mut scene = luxtally::scene::load(&args.run.scene)?;
     let options = run_options(&args.run, &scene)?;
+    outputs_of(&args.run)?;
     // Checked before the photon pass, which may be long.
     let mut camera = render::camera_of(&scene)?.clone();
     if args.no_interpolation {
@@ -681,6 +741,7 @@ fn render_into(
     camera: &luxtally::scene::Camera,
     out: &Path,
 ) -> Result<()> {
+    let outputs = outputs_of(&args.run)?;
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
     let map = match &args.from {
@@ -711,7 +772,9 @@ fn render_into(
         &|n| progress.inc(n as u64, line),
     )?;
     progress.finish(true, line(pixels));
-    render::output::write_all(&r.image, out)?;
+    if outputs.render {
+        render::output::write_all(&r.image, out)?;
+    }
     if !args.run.quiet {
         println!(
             "render: {}×{} px, {} samples/px, {} eye rays + {} shadow rays in {:.2} s \
@@ -886,6 +949,15 @@ fn info_command(path: &Path) -> Result<()> {
         g.triangle_count(),
         g.total_area_m2()
     );
+    if !g.instanced.is_empty() {
+        println!(
+            "  unmapped: {} instances of {} prototypes ({} triangles stored, {} if flattened)",
+            g.instanced.instances.len(),
+            g.instanced.prototypes.len(),
+            g.instanced.stored_triangle_count(),
+            g.instanced.flattened_triangle_count()
+        );
+    }
     if let Some((lo, hi)) = g.world_bounds() {
         println!("  bounds {:.3?} → {:.3?}", lo.to_array(), hi.to_array());
     }
@@ -961,6 +1033,54 @@ fn photometry_command(file: &Path, out: Option<PathBuf>) -> Result<()> {
         println!("{line}");
     }
     println!("polar diagram: {}", out.display());
+    Ok(())
+}
+
+/// `bench-scale`: each case in a child process of this binary (its own peak RSS), then
+/// the table; with `--case`, that case here, as one JSON line.
+fn bench_scale_command(
+    mesh: &Path,
+    photons: u64,
+    threads: usize,
+    (max_instances, max_triangles): (u64, u64),
+    case: Option<&str>,
+) -> Result<()> {
+    use luxtally::bench::{ScaleCase, ScaleResult};
+    if let Some(case) = case {
+        let r = luxtally::bench::bench_scale_case(case.parse()?, mesh, photons, threads)?;
+        let line = serde_json::to_string(&r)
+            .map_err(|e| luxtally::Error::Unsupported(format!("bench-scale: {e}")))?;
+        println!("{line}");
+        return Ok(());
+    }
+    let powers = |lo: u64, hi: u64| {
+        std::iter::successors(Some(lo), |n| n.checked_mul(10)).take_while(move |n| *n <= hi)
+    };
+    let cases: Vec<ScaleCase> = powers(100, max_instances)
+        .map(ScaleCase::Instanced)
+        .chain(powers(10_000, max_triangles).map(ScaleCase::Flattened))
+        .collect();
+    let exe = std::env::current_exe().map_err(|e| luxtally::Error::io("current_exe", e))?;
+    let mut results = Vec::new();
+    for case in cases {
+        eprintln!("bench-scale: {case} …");
+        let out = std::process::Command::new(&exe)
+            .args(["bench-scale", "--case", &case.to_string(), "--photons"])
+            .arg(photons.to_string())
+            .args(["--threads", &threads.to_string(), "--mesh"])
+            .arg(mesh)
+            .output()
+            .map_err(|e| luxtally::Error::io(&exe, e))?;
+        let text = String::from_utf8_lossy(&out.stdout);
+        match serde_json::from_str::<ScaleResult>(text.trim()) {
+            Ok(r) if out.status.success() => results.push(r),
+            _ => eprintln!(
+                "bench-scale: {case} failed: {}",
+                String::from_utf8_lossy(&out.stderr).trim()
+            ),
+        }
+    }
+    print!("{}", luxtally::bench::scale_table(&results, threads));
     Ok(())
 }
 

@@ -1,8 +1,13 @@
 //! Embree 3 over FFI: a safe, RAII wrapper around one device and one committed scene
-//! with a single triangle geometry holding every triangle (so Embree's `primID` is the
-//! global triangle id), and the four query APIs (single, 8/16-wide packets, streams).
+//! with a single triangle geometry (id 0) holding every mapped triangle (so Embree's
+//! `primID` is the global triangle id), and the four query APIs (single, 8/16-wide
+//! packets, streams).
+//!
+//! Unmapped objects are two-level: one committed scene per prototype, attached to the
+//! top scene as `RTC_GEOMETRY_TYPE_INSTANCE` geometries (instance k has geometry id
+//! k + 1); a hit reports `instID[0]` and the prototype's `primID`.
 
-use super::{HitBatch, RayApi, RayBatch, RayCaster};
+use super::{HitBatch, RayApi, RayBatch, RayCaster, INSTANCE_HIT};
 use crate::scene::Geometry;
 use crate::{Error, Result};
 use std::ffi::{c_char, c_void, CStr, CString};
@@ -57,6 +62,11 @@ pub struct EmbreeScene {
     /// Boxed so its address, given to Embree as the callback's user pointer, is stable.
     errors: Box<ErrorSlot>,
     triangles: usize,
+    /// One committed scene per prototype (released before the device).
+    prototypes: Vec<sys::RTCScene>,
+    /// Per instance, `Instance::normal_matrix` (columns), which takes Embree's
+    /// prototype-space `Ng` to the local frame.
+    normal_maps: Vec<[f32; 9]>,
 }
 
 // SAFETY: after `rtcCommitScene`, Embree scenes are immutable and documented as safe to
@@ -105,6 +115,8 @@ impl EmbreeScene {
             scene: std::ptr::null_mut(),
             errors,
             triangles: geometry.triangles.len(),
+            prototypes: Vec::new(),
+            normal_maps: Vec::new(),
         };
         let user = &*this.errors as *const ErrorSlot as *mut c_void;
         // SAFETY: `device` is live; `user` points at the boxed slot, which outlives it.
@@ -125,7 +137,10 @@ impl EmbreeScene {
             sys::rtcSetSceneBuildQuality(this.scene, sys::RTC_BUILD_QUALITY_MEDIUM);
         }
         if !geometry.triangles.is_empty() {
-            this.attach_triangles(geometry)?;
+            this.attach_triangles(this.scene, &geometry.vertices, &geometry.triangles, 0)?;
+        }
+        if !geometry.instanced.is_empty() {
+            this.attach_instances(geometry)?;
         }
         // SAFETY: `this.scene` is live; its geometry buffers are filled.
         unsafe { sys::rtcCommitScene(this.scene) };
@@ -133,11 +148,95 @@ impl EmbreeScene {
         Ok(this)
     }
 
-    /// Copies the mesh into Embree-owned buffers (Embree pads vertex buffers for its
-    /// 16-byte loads itself) as geometry 0.
-    fn attach_triangles(&mut self, geometry: &Geometry) -> Result<()> {
-        let nverts = geometry.vertices.len();
-        let ntris = geometry.triangles.len();
+    /// One committed scene per prototype, and one instance geometry per instance
+    /// (id k + 1) in the top scene.
+    fn attach_instances(&mut self, geometry: &Geometry) -> Result<()> {
+        let inst = &geometry.instanced;
+        for proto in &inst.prototypes {
+            // SAFETY: `self.device` is live.
+            let scene = unsafe { sys::rtcNewScene(self.device) };
+            self.check("rtcNewScene")?;
+            if scene.is_null() {
+                return Err(Error::Embree("rtcNewScene returned no scene".into()));
+            }
+            self.prototypes.push(scene);
+            // SAFETY: `scene` is live and not yet committed.
+            unsafe {
+                sys::rtcSetSceneFlags(scene, sys::RTC_SCENE_FLAG_ROBUST);
+                sys::rtcSetSceneBuildQuality(scene, sys::RTC_BUILD_QUALITY_MEDIUM);
+            }
+            if let Some((k, t)) = proto
+                .triangles
+                .iter()
+                .enumerate()
+                .find(|(_, t)| t.iter().any(|&i| i as usize >= proto.vertices.len()))
+            {
+                return Err(Error::Embree(format!(
+                    "prototype triangle {k} has vertex indices {t:?} but the prototype has {} vertices",
+                    proto.vertices.len()
+                )));
+            }
+            if !proto.triangles.is_empty() {
+                self.attach_triangles(scene, &proto.vertices, &proto.triangles, 0)?;
+            }
+            // SAFETY: `scene` is live; its geometry is committed.
+            unsafe { sys::rtcCommitScene(scene) };
+            self.check("rtcCommitScene (prototype)")?;
+        }
+        self.normal_maps.reserve_exact(inst.instances.len());
+        for (k, instance) in inst.instances.iter().enumerate() {
+            let Some(&proto) = self.prototypes.get(instance.prototype as usize) else {
+                return Err(Error::Embree(format!(
+                    "instance {k} refers to missing prototype {}",
+                    instance.prototype
+                )));
+            };
+            let id = u32::try_from(k + 1)
+                .ok()
+                .filter(|&id| id != INVALID_ID)
+                .ok_or_else(|| Error::Embree("too many instances".into()))?;
+            // SAFETY: `self.device` is live.
+            let geom = unsafe { sys::rtcNewGeometry(self.device, sys::RTC_GEOMETRY_TYPE_INSTANCE) };
+            self.check("rtcNewGeometry (instance)")?;
+            if geom.is_null() {
+                return Err(Error::Embree("rtcNewGeometry returned no geometry".into()));
+            }
+            // SAFETY: `geom` is a live instance geometry, `proto` a committed scene,
+            // `to_local` 12 floats in the stated column-major 3 × 4 layout (copied by
+            // Embree); the top scene is live and uncommitted.
+            unsafe {
+                sys::rtcSetGeometryInstancedScene(geom, proto);
+                sys::rtcSetGeometryTransform(
+                    geom,
+                    0,
+                    sys::RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR,
+                    instance.to_local.as_ptr() as *const c_void,
+                );
+                sys::rtcCommitGeometry(geom);
+                sys::rtcAttachGeometryByID(self.scene, geom, id);
+                sys::rtcReleaseGeometry(geom);
+            }
+            self.check("rtcAttachGeometryByID (instance)")?;
+            let mut m = [0f32; 9];
+            for (c, col) in instance.normal_matrix().iter().enumerate() {
+                m[3 * c..3 * c + 3].copy_from_slice(&col.to_array());
+            }
+            self.normal_maps.push(m);
+        }
+        Ok(())
+    }
+
+    /// Copies a mesh into Embree-owned buffers (Embree pads vertex buffers for its
+    /// 16-byte loads itself) as geometry `id` of `scene`.
+    fn attach_triangles(
+        &mut self,
+        scene: sys::RTCScene,
+        vertices: &[glam::Vec3],
+        triangles: &[[u32; 3]],
+        id: u32,
+    ) -> Result<()> {
+        let nverts = vertices.len();
+        let ntris = triangles.len();
         // SAFETY: `self.device` is live.
         let geom = unsafe { sys::rtcNewGeometry(self.device, sys::RTC_GEOMETRY_TYPE_TRIANGLE) };
         self.check("rtcNewGeometry")?;
@@ -179,17 +278,17 @@ impl EmbreeScene {
                     std::slice::from_raw_parts_mut(ibuf, 3 * ntris),
                 )
             };
-            for (dst, v) in verts.chunks_exact_mut(3).zip(&geometry.vertices) {
+            for (dst, v) in verts.chunks_exact_mut(3).zip(vertices) {
                 dst.copy_from_slice(&v.to_array());
             }
-            for (dst, t) in idx.chunks_exact_mut(3).zip(&geometry.triangles) {
+            for (dst, t) in idx.chunks_exact_mut(3).zip(triangles) {
                 dst.copy_from_slice(t);
             }
             // SAFETY: `geom` is live with both buffers set; attaching to a live,
             // uncommitted scene.
             unsafe {
                 sys::rtcCommitGeometry(geom);
-                sys::rtcAttachGeometry(self.scene, geom);
+                sys::rtcAttachGeometryByID(scene, geom, id);
             }
             self.check("rtcCommitGeometry")
         });
@@ -234,6 +333,9 @@ impl Drop for EmbreeScene {
             if !self.scene.is_null() {
                 sys::rtcReleaseScene(self.scene);
             }
+            for &p in &self.prototypes {
+                sys::rtcReleaseScene(p);
+            }
             sys::rtcReleaseDevice(self.device);
         }
     }
@@ -255,21 +357,32 @@ fn context() -> sys::RTCIntersectContext {
 #[allow(clippy::too_many_arguments)]
 fn store_hit(
     hits: &mut HitBatch,
+    normal_maps: &[[f32; 9]],
     i: usize,
     tfar: f32,
-    geom: u32,
-    prim: u32,
+    (geom, inst, prim): (u32, u32, u32),
     u: f32,
     v: f32,
-    ng: [f32; 3],
+    mut ng: [f32; 3],
 ) {
     if geom == INVALID_ID {
         // `reset` already marked the entry as a miss.
         return;
     }
+    if inst == INVALID_ID {
+        hits.tri[i] = prim;
+    } else {
+        // Instance k is geometry k + 1; Embree 3 reports `Ng` in the prototype's frame.
+        let k = inst.wrapping_sub(1);
+        hits.tri[i] = INSTANCE_HIT;
+        hits.inst[i] = k;
+        hits.prim[i] = prim;
+        if let Some(m) = normal_maps.get(k as usize) {
+            ng = [0, 1, 2].map(|r| m[r] * ng[0] + m[3 + r] * ng[1] + m[6 + r] * ng[2]);
+        }
+    }
     let inv = 1.0 / (ng[0] * ng[0] + ng[1] * ng[1] + ng[2] * ng[2]).sqrt();
     hits.t[i] = tfar;
-    hits.tri[i] = prim;
     hits.u[i] = u;
     hits.v[i] = v;
     hits.ngx[i] = ng[0] * inv;
@@ -350,6 +463,7 @@ macro_rules! intersect_packets {
             let mut p = <$rayhit>::default();
             fill_packet!(p.ray, valid.0, $w, $rays, base, m);
             p.hit.geomID = [INVALID_ID; $w];
+            p.hit.instID = [[INVALID_ID; $w]; 1];
             // SAFETY: the scene is committed; `valid` and `p` are aligned as the
             // signature requires (repr align / bindgen's align attribute) and live.
             unsafe { sys::$call(valid.0.as_ptr(), $self.scene, &mut ctx, &mut p) };
@@ -358,10 +472,10 @@ macro_rules! intersect_packets {
                 let ng = [h.Ng_x[k], h.Ng_y[k], h.Ng_z[k]];
                 store_hit(
                     $hits,
+                    &$self.normal_maps,
                     base + k,
                     p.ray.tfar[k],
-                    h.geomID[k],
-                    h.primID[k],
+                    (h.geomID[k], h.instID[0][k], h.primID[k]),
                     h.u[k],
                     h.v[k],
                     ng,
@@ -410,7 +524,8 @@ impl RayCaster for EmbreeScene {
                     unsafe { sys::rtcIntersect1(self.scene, &mut ctx, &mut rh) };
                     let h = &rh.hit;
                     let ng = [h.Ng_x, h.Ng_y, h.Ng_z];
-                    store_hit(hits, i, rh.ray.tfar, h.geomID, h.primID, h.u, h.v, ng);
+                    let ids = (h.geomID, h.instID[0], h.primID);
+                    store_hit(hits, &self.normal_maps, i, rh.ray.tfar, ids, h.u, h.v, ng);
                 }
             }
             RayApi::Packet8 => {
@@ -452,10 +567,10 @@ impl RayCaster for EmbreeScene {
                         let ng = [h.Ng_x, h.Ng_y, h.Ng_z];
                         store_hit(
                             hits,
+                            &self.normal_maps,
                             base + k,
                             rh.ray.tfar,
-                            h.geomID,
-                            h.primID,
+                            (h.geomID, h.instID[0], h.primID),
                             h.u,
                             h.v,
                             ng,

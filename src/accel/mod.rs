@@ -10,9 +10,14 @@ pub mod embree;
 
 use crate::scene::Geometry;
 use crate::{Error, Result};
+use glam::Vec3;
 
 /// Triangle id of a ray that hit nothing.
 pub const NO_HIT: u32 = u32::MAX;
+
+/// Triangle id of a hit on an instance (an unmapped object): `inst` and `prim` say which
+/// instance and which triangle of its prototype.
+pub const INSTANCE_HIT: u32 = u32::MAX - 1;
 
 /// A batch of rays, structure of arrays. All vectors have the same length.
 #[derive(Clone, Debug, Default)]
@@ -84,12 +89,20 @@ impl RayBatch {
 pub struct HitBatch {
     /// Distance along the ray (in units of its direction's length); `f32::INFINITY` on a miss.
     pub t: Vec<f32>,
-    /// Global triangle id (index into `Geometry::triangles`), or [`NO_HIT`].
+    /// Global triangle id (index into `Geometry::triangles`), [`NO_HIT`] or
+    /// [`INSTANCE_HIT`].
     pub tri: Vec<u32>,
+    /// Instance index (into `Instanced::instances`) where `tri` is [`INSTANCE_HIT`];
+    /// unspecified elsewhere.
+    pub inst: Vec<u32>,
+    /// Triangle of the instance's prototype where `tri` is [`INSTANCE_HIT`].
+    pub prim: Vec<u32>,
     /// Barycentric coordinates of the hit (weights of vertices 1 and 2).
     pub u: Vec<f32>,
     pub v: Vec<f32>,
-    /// Unit geometric normal of the hit triangle, (v1 − v0) × (v2 − v0) orientation.
+    /// Unit geometric normal of the hit triangle in the local frame, (v1 − v0) × (v2 − v0)
+    /// orientation; on instances that of the prototype carried by `Instance::normal`
+    /// (a mirrored copy keeps its outside, as a flattened mirrored copy does).
     pub ngx: Vec<f32>,
     pub ngy: Vec<f32>,
     pub ngz: Vec<f32>,
@@ -102,6 +115,9 @@ impl HitBatch {
         self.t.resize(n, f32::INFINITY);
         self.tri.clear();
         self.tri.resize(n, NO_HIT);
+        // Read only where `tri` says so: sized, not cleared.
+        self.inst.resize(n, 0);
+        self.prim.resize(n, 0);
         for v in [
             &mut self.u,
             &mut self.v,
@@ -121,6 +137,48 @@ impl HitBatch {
     pub fn is_empty(&self) -> bool {
         self.t.is_empty()
     }
+
+    /// What the tracer needs of hit `k`: point, normal, material and, for mapped
+    /// triangles, the triangle id; `None` on a miss.
+    #[inline]
+    pub fn surface(&self, k: usize, g: &Geometry) -> Option<Surface> {
+        let tri = self.tri[k];
+        let (u, v) = (self.u[k], self.v[k]);
+        if tri == NO_HIT {
+            return None;
+        }
+        if tri == INSTANCE_HIT {
+            let (point, normal, material) = g.instanced.surface(self.inst[k], self.prim[k], u, v);
+            return Some(Surface {
+                point,
+                normal,
+                material,
+                mapped: None,
+            });
+        }
+        let t = tri as usize;
+        // Hit point from barycentrics: its error scales with the vertices, which the
+        // ray-origin offset is sized for.
+        let [a, b, c] = g.triangles[t].map(|i| g.vertices[i as usize]);
+        Some(Surface {
+            point: a + (b - a) * u + (c - a) * v,
+            normal: g.normal[t],
+            material: g.material[t],
+            mapped: Some(tri),
+        })
+    }
+}
+
+/// A surface point hit by a ray, local frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surface {
+    pub point: Vec3,
+    /// Unit geometric normal, (v1 − v0) × (v2 − v0) orientation of the placed triangle.
+    pub normal: Vec3,
+    /// Index into `Scene::materials`.
+    pub material: u32,
+    /// The global triangle id if the triangle holds a map.
+    pub mapped: Option<u32>,
 }
 
 /// How a batch is handed to the backend. Embree implements all; obvhs traces one ray

@@ -47,13 +47,85 @@ pub fn summary_value(state: &RunState<'_>) -> Result<Value> {
         .map_err(|e| Error::Unsupported(format!("summary.json: {e}")))
 }
 
+/// Which files a run writes besides summary.json (`--outputs LIST`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Outputs {
+    /// `receivers/NAME.{exr,csv,png}` and `receivers/NAME_error.png`.
+    pub receivers: bool,
+    /// `scene_map.ply`.
+    pub map: bool,
+    /// `report.html`.
+    pub report: bool,
+    /// The indirect map `luxtally render --from` reuses.
+    pub indirect: bool,
+    /// `render.{exr,png}` and `render_false_colour.png` (`render` only).
+    pub render: bool,
+}
+
+impl Default for Outputs {
+    fn default() -> Self {
+        Outputs::ALL
+    }
+}
+
+impl Outputs {
+    pub const ALL: Outputs = Outputs {
+        receivers: true,
+        map: true,
+        report: true,
+        indirect: true,
+        render: true,
+    };
+    pub const NAMES: &'static str = "receivers, map, report, indirect, render";
+
+    /// Parses `receivers,report` (comma-separated; `all` for everything, `none` for
+    /// summary.json alone).
+    pub fn parse(list: &str) -> Result<Outputs> {
+        let mut o = Outputs {
+            receivers: false,
+            map: false,
+            report: false,
+            indirect: false,
+            render: false,
+        };
+        for name in list.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+            match name {
+                "receivers" => o.receivers = true,
+                "map" | "scene_map" => o.map = true,
+                "report" => o.report = true,
+                "indirect" => o.indirect = true,
+                "render" => o.render = true,
+                "all" => o = Outputs::ALL,
+                "none" | "summary" => {}
+                other => {
+                    return Err(Error::input(
+                        "--outputs",
+                        format!(
+                            "unknown output `{other}` (expected a comma-separated list of {}, or all or none)",
+                            Outputs::NAMES
+                        ),
+                    ))
+                }
+            }
+        }
+        Ok(o)
+    }
+}
+
 /// Every file besides summary.json: `receivers/NAME.{exr,csv,png}`,
 /// `receivers/NAME_error.png`, `scene_map.ply` and `report.html`.
 pub fn write_run_files(out: &Path, state: &RunState<'_>) -> Result<()> {
+    write_run_files_with(out, state, Outputs::ALL)
+}
+
+/// The files of `outputs` besides summary.json.
+pub fn write_run_files_with(out: &Path, state: &RunState<'_>, outputs: Outputs) -> Result<()> {
     let s = summary::build(state);
     let dir = out.join("receivers");
-    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-    for r in &state.scene.receivers {
+    if outputs.receivers {
+        std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    }
+    for r in state.scene.receivers.iter().filter(|_| outputs.receivers) {
         if let Some(rs) = s.receivers.get(&r.name) {
             let exr = receiver_files::receiver_exr(&r.name, rs)?;
             write_atomic(&dir.join(format!("{}.exr", file_stem(&r.name))), &exr)?;
@@ -64,14 +136,49 @@ pub fn write_run_files(out: &Path, state: &RunState<'_>) -> Result<()> {
             )?;
         }
     }
-    write_atomic(&out.join("scene_map.ply"), &ply::scene_map_ply(state))?;
+    if outputs.map {
+        write_atomic_with(&out.join("scene_map.ply"), |w| {
+            ply::write_scene_map_ply(state, w)
+        })?;
+    }
+    if !(outputs.receivers || outputs.report) {
+        return Ok(());
+    }
     let value =
         serde_json::to_value(&s).map_err(|e| Error::Unsupported(format!("summary.json: {e}")))?;
-    write_report(out, &value, report::DEFAULT_REFRESH_S)
+    if outputs.receivers {
+        write_receiver_pngs(out, &value)?;
+    }
+    if outputs.report {
+        write_live_report(out, &value, report::DEFAULT_REFRESH_S)?;
+    }
+    Ok(())
+}
+
+/// As [`write_atomic`], streaming through a `BufWriter` instead of a byte buffer.
+pub fn write_atomic_with(
+    path: &Path,
+    write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
+) -> Result<()> {
+    use std::io::Write;
+    let tmp = path.with_extension("tmp");
+    let file = std::fs::File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
+    let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
+    write(&mut w)
+        .and_then(|()| w.flush())
+        .map_err(|e| Error::io(&tmp, e))?;
+    drop(w);
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
 }
 
 /// report.html and the receivers' PNG previews from summary.json's document.
 pub fn write_report(out: &Path, summary: &Value, refresh_s: f64) -> Result<()> {
+    write_receiver_pngs(out, summary)?;
+    write_live_report(out, summary, refresh_s)
+}
+
+/// The receivers' PNG previews from summary.json's document.
+fn write_receiver_pngs(out: &Path, summary: &Value) -> Result<()> {
     let origin = out.join("summary.json").display().to_string();
     let receivers = preview::ReceiverData::from_summary(summary, &origin)?;
     let dir = out.join("receivers");
@@ -86,7 +193,7 @@ pub fn write_report(out: &Path, summary: &Value, refresh_s: f64) -> Result<()> {
             &error,
         )?;
     }
-    write_live_report(out, summary, refresh_s)
+    Ok(())
 }
 
 /// report.html alone (during a run: the PNGs wait for the end).

@@ -12,6 +12,7 @@
 use super::colormap::{normalise, viridis};
 use crate::run::RunState;
 use crate::stats::{triangle_illuminance_lx, MapKind, REL_ERROR_UNKNOWN};
+use std::io::Write;
 
 /// Per-face values of the map, f64.
 pub struct FaceMap {
@@ -47,8 +48,17 @@ pub fn face_map(state: &RunState<'_>) -> FaceMap {
     m
 }
 
-/// The PLY file of a run's scene map.
+/// The PLY file of a run's scene map, in memory (tests; runs stream it with
+/// [`write_scene_map_ply`]).
 pub fn scene_map_ply(state: &RunState<'_>) -> Vec<u8> {
+    let mut out = Vec::new();
+    write_scene_map_ply(state, &mut out).expect("writing to memory cannot fail");
+    out
+}
+
+/// Streams the PLY file of a run's scene map to `out` (wrap files in a `BufWriter`):
+/// only the per-face and per-vertex values are held, never the file's bytes.
+pub fn write_scene_map_ply(state: &RunState<'_>, out: &mut impl Write) -> std::io::Result<()> {
     let g = &state.scene.geometry;
     let faces = face_map(state);
     let mut weight = vec![0.0f64; g.vertices.len()];
@@ -84,29 +94,33 @@ pub fn scene_map_ply(state: &RunState<'_>) -> Vec<u8> {
         g.vertices.len(),
         g.triangle_count()
     );
-    let mut out = header.into_bytes();
-    out.reserve(g.vertices.len() * 19 + g.triangle_count() * 25);
+    out.write_all(header.as_bytes())?;
     for (v, &e) in g.vertices.iter().zip(&vertex_lx) {
         let world = g.origin + v.as_dvec3();
-        for x in [world.x, world.y, world.z, e] {
-            out.extend_from_slice(&(x as f32).to_le_bytes());
+        let mut record = [0u8; 19];
+        for (k, x) in [world.x, world.y, world.z, e].into_iter().enumerate() {
+            record[4 * k..4 * k + 4].copy_from_slice(&(x as f32).to_le_bytes());
         }
-        out.extend_from_slice(&viridis(normalise(e, scale)));
+        record[16..].copy_from_slice(&viridis(normalise(e, scale)));
+        out.write_all(&record)?;
     }
     for (k, tri) in g.triangles.iter().enumerate() {
-        out.push(3);
-        for &v in tri {
-            out.extend_from_slice(&(v as i32).to_le_bytes());
+        let mut record = [0u8; 25];
+        record[0] = 3;
+        for (j, &v) in tri.iter().enumerate() {
+            record[1 + 4 * j..5 + 4 * j].copy_from_slice(&(v as i32).to_le_bytes());
         }
-        for x in [
+        let values = [
             faces.illuminance_lx[k],
             faces.indirect_lx[k],
             faces.rel_error[k],
-        ] {
-            out.extend_from_slice(&(x as f32).to_le_bytes());
+        ];
+        for (j, x) in values.into_iter().enumerate() {
+            record[13 + 4 * j..17 + 4 * j].copy_from_slice(&(x as f32).to_le_bytes());
         }
+        out.write_all(&record)?;
     }
-    out
+    Ok(())
 }
 
 /// The `q` quantile (nearest rank) of the finite values, 0 without any.

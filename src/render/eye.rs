@@ -6,7 +6,7 @@
 //! the same shadow rays, and continue through one sampled direction per glossy lobe.
 
 use super::map::IndirectField;
-use crate::accel::{HitBatch, RayBatch, RayCaster, NO_HIT};
+use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng::photon_stream;
 use crate::scene::{Camera, Material, Scene};
 use crate::trace::bsdf::{fr_dielectric, Bsdf};
@@ -276,35 +276,37 @@ impl<'a> EyePass<'a> {
         if !lights_counted {
             sample_l[sample as usize] += weight * self.area_light_seen(o, dir, t_hit);
         }
-        let tri = s.hits.tri[k];
-        if tri == NO_HIT {
+        let Some(surface) = s.hits.surface(k, &self.scene.geometry) else {
             return;
-        }
-        let g = &self.scene.geometry;
-        let t = tri as usize;
-        let m: &Material = &self.scene.materials[g.material[t] as usize];
-        let bsdf = &self.bsdfs[g.material[t] as usize];
+        };
+        let m: &Material = &self.scene.materials[surface.material as usize];
+        let bsdf = &self.bsdfs[surface.material as usize];
         let (glossy_r, glossy_t) = bsdf.glossy();
         let glossy = glossy_r + glossy_t > 0.0;
-        let normal = g.normal[t];
-        let n = normal.as_dvec3();
+        let n = surface.normal.as_dvec3();
         let back = dir.dot(n) > 0.0;
         // Normal on the eye's side.
         let facing = if back { -n } else { n };
-        let [a, b, c] = g.triangles[t].map(|i| g.vertices[i as usize]);
         let (u, v) = (s.hits.u[k], s.hits.v[k]);
-        let p = a + (b - a) * u + (c - a) * v;
+        let p = surface.point;
 
         if m.reflectance > 0.0 || m.transmittance > 0.0 {
-            let e_seen = self.field.illuminance_lx(t, back, u, v);
-            let e_other = self.field.illuminance_lx(t, !back, u, v);
+            // Unmapped (instanced) objects have no indirect map: direct light only.
+            let (e_seen, e_other) = match surface.mapped {
+                Some(t) => (
+                    self.field.illuminance_lx(t as usize, back, u, v),
+                    self.field.illuminance_lx(t as usize, !back, u, v),
+                ),
+                None => (0.0, 0.0),
+            };
             sample_l[sample as usize] +=
                 weight * (m.reflectance * e_seen + m.transmittance * e_other) / PI;
         }
-        if glossy && !may_continue {
+        if let (true, false, Some(t)) = (glossy, may_continue, surface.mapped) {
             // The depth limit: the glossy lobes' indirect light is read from the map as
             // if they were Lambertian of the same weights (the rough dielectric split by
-            // Fresnel at the viewing angle).
+            // Fresnel at the viewing angle); unmapped objects have none.
+            let t = t as usize;
             let e_seen = self.field.illuminance_lx(t, back, u, v);
             let e_other = self.field.illuminance_lx(t, !back, u, v);
             let cos_o = -dir.dot(n);

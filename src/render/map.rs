@@ -112,7 +112,8 @@ impl IndirectMap {
     }
 }
 
-/// FNV-1a over what the map depends on: geometry (vertices, triangles, their materials),
+/// FNV-1a over what the map depends on: geometry (vertices, triangles, their materials,
+/// and the instanced objects that shadow them),
 /// materials and lights. The camera is left out: it does not change the map.
 pub fn scene_fingerprint(scene: &Scene) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
@@ -136,6 +137,26 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
             eat(&i.to_le_bytes());
         }
         eat(&m.to_le_bytes());
+    }
+    for p in &g.instanced.prototypes {
+        eat(&(p.triangles.len() as u64).to_le_bytes());
+        for v in &p.vertices {
+            for x in v.to_array() {
+                eat(&x.to_le_bytes());
+            }
+        }
+        for (t, m) in p.triangles.iter().zip(&p.material) {
+            for i in t {
+                eat(&i.to_le_bytes());
+            }
+            eat(&m.to_le_bytes());
+        }
+    }
+    for i in &g.instanced.instances {
+        eat(&i.prototype.to_le_bytes());
+        for x in i.to_local {
+            eat(&x.to_le_bytes());
+        }
     }
     eat(format!("{:?}", scene.materials).as_bytes());
     eat(format!("{:?}", scene.lights).as_bytes());

@@ -76,6 +76,31 @@ pub struct ObjectFile {
     pub scale: Option<ScaleFile>,
     pub rotate_deg: Option<[f64; 3]>,
     pub translate: Option<[f64; 3]>,
+    /// Per-triangle tallies (the scene map) for this object; default true, false when
+    /// the object has `instances` or `grid`.
+    pub map: Option<bool>,
+    /// Copies of the object, each placed after the object's own transform.
+    pub instances: Option<Vec<InstanceFile>>,
+    /// A regular grid of copies in the world x–y plane.
+    pub grid: Option<GridFile>,
+}
+
+/// One entry of `instances = [...]`: scale → rotate → translate, after the object's own.
+/// A negative scale mirrors.
+#[derive(Deserialize, Debug, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub struct InstanceFile {
+    pub scale: Option<ScaleFile>,
+    pub rotate_deg: Option<[f64; 3]>,
+    pub translate: Option<[f64; 3]>,
+}
+
+/// `grid = {count = [nx, ny], spacing = [dx, dy]}`: copies at (i·dx, j·dy, 0).
+#[derive(Deserialize, Debug, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub struct GridFile {
+    pub count: [u64; 2],
+    pub spacing: [f64; 2],
 }
 
 /// One `[[lights]]` entry; `type` selects which fields are required.

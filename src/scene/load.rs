@@ -6,17 +6,18 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::file::{
-    self, CameraFile, LightFile, MaterialFile, ObjectFile, ReceiverFile, ScaleFile, SimulationFile,
+    self, CameraFile, InstanceFile, LightFile, MaterialFile, ObjectFile, ReceiverFile, ScaleFile,
+    SimulationFile,
 };
 use super::mesh_io;
 use super::shapes::{self, Mesh, Transform};
 use super::{
-    Camera, Estimator, Geometry, Light, LightKind, Luminaire, Material, Quantity, Receiver, Scene,
-    Simulation,
+    Camera, Estimator, Geometry, Light, LightKind, Luminaire, Material, Placement, PrototypeMesh,
+    Quantity, Receiver, Scene, Simulation,
 };
 use crate::error::{Error, Result};
 use crate::photometry::Photometry;
-use glam::DVec3;
+use glam::{DAffine3, DMat3, DVec3};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -184,17 +185,30 @@ fn validate_material(m: &Material, at: &str) -> Result<()> {
     Ok(())
 }
 
-/// Collects every object's triangles in world space, then builds one `Geometry`.
+/// Mapped triangles are tallied with 8 deposit codes each in a `u32`
+/// (`tally::deposit_code`), and a map costs ~200 bytes per triangle: 2²⁹ − 1 triangles
+/// is both the code space and ~100 GiB.
+pub const MAX_MAPPED_TRIANGLES: u64 = (1 << 29) - 1;
+
+/// Instances: ~0.9 KiB each measured with Embree (BENCHMARKS.md, bench-scale), so 2²⁴ is
+/// ~15 GiB.
+pub const MAX_INSTANCES: u64 = 1 << 24;
+
+/// Collects every mapped object's triangles in world space and every unmapped object's
+/// prototypes and placements, then builds one `Geometry`.
 #[derive(Default)]
 struct GeometryBuilder {
     vertices: Vec<DVec3>,
     triangles: Vec<[u32; 3]>,
     material: Vec<u32>,
     object: Vec<u32>,
+    prototypes: Vec<PrototypeMesh>,
+    placements: Vec<Placement>,
 }
 
 impl GeometryBuilder {
     fn add(&mut self, mesh: Mesh, materials: &[u32], object: u32, at: &str) -> Result<()> {
+        self.check_mapped(mesh.triangles.len() as u64, at)?;
         // Geometry indexes vertices with u32.
         if self.vertices.len() + mesh.vertices.len() > u32::MAX as usize {
             return Err(Error::input(
@@ -212,6 +226,34 @@ impl GeometryBuilder {
         Ok(())
     }
 
+    /// Errs, before anything is allocated, when `more` mapped triangles would pass
+    /// [`MAX_MAPPED_TRIANGLES`].
+    fn check_mapped(&self, more: u64, at: &str) -> Result<()> {
+        let total = self.triangles.len() as u64 + more;
+        if total > MAX_MAPPED_TRIANGLES {
+            return Err(Error::input(
+                at,
+                format!(
+                    "{total} mapped triangles exceed the limit of {MAX_MAPPED_TRIANGLES} \
+                     (each holds a map): set `map = false` on instanced objects"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Errs when `more` instances would pass [`MAX_INSTANCES`].
+    fn check_instances(&self, more: u64, at: &str) -> Result<()> {
+        let total = self.placements.len() as u64 + more;
+        if total > MAX_INSTANCES {
+            return Err(Error::input(
+                at,
+                format!("{total} instances exceed the limit of {MAX_INSTANCES}"),
+            ));
+        }
+        Ok(())
+    }
+
     fn finish(self, origin: &str) -> Result<Geometry> {
         if let Some(bad) = self.vertices.iter().find(|v| !v.is_finite()) {
             return Err(Error::input(
@@ -219,11 +261,13 @@ impl GeometryBuilder {
                 format!("object vertex {bad} is not finite after transforms"),
             ));
         }
-        Ok(Geometry::from_world(
+        Ok(Geometry::with_instances(
             &self.vertices,
             &self.triangles,
             &self.material,
             &self.object,
+            &self.prototypes,
+            &self.placements,
         ))
     }
 }
@@ -282,48 +326,227 @@ fn load_object(
         None => None,
     };
     let transform = transform(o, &at)?;
+    let copies = copies(o, &at)?;
+    let mapped = o.map.unwrap_or(o.instances.is_none() && o.grid.is_none());
+    let object = i as u32;
 
-    let (mut mesh, per_tri) = match (&o.shape, &o.file) {
-        (Some(_), Some(_)) => {
-            return Err(Error::input(&at, "give either `shape` or `file`, not both"));
+    // (prototypes with scene materials, placements in the object's frame)
+    let (prototypes, placements): (Vec<PrototypeMesh>, Vec<(u32, DAffine3)>) =
+        match (&o.shape, &o.file) {
+            (Some(_), Some(_)) => {
+                return Err(Error::input(&at, "give either `shape` or `file`, not both"));
+            }
+            (None, None) => return Err(Error::input(&at, "needs `shape` or `file`")),
+            (Some(shape), None) => {
+                let material = override_material.ok_or_else(|| {
+                    Error::input(
+                        format!("{at}.material"),
+                        format!("missing (required for shape \"{shape}\")"),
+                    )
+                })?;
+                let mesh = builtin_shape(o, shape, &at)?;
+                let proto = PrototypeMesh {
+                    material: vec![material; mesh.triangles.len()],
+                    vertices: mesh.vertices,
+                    triangles: mesh.triangles,
+                };
+                (vec![proto], vec![(0, DAffine3::IDENTITY)])
+            }
+            (None, Some(file)) => {
+                forbid(&shape_keys(o), &[], &at, "a mesh file")?;
+                let mesh_path = base_dir.join(file);
+                let parts = mesh_io::load_mesh_parts(&mesh_path, &format!("{at}.file"))?;
+                let per_file = parts.flattened_triangle_count();
+                if mapped {
+                    builder.check_mapped(per_file.saturating_mul(copies.len() as u64), &at)?;
+                }
+                let mut protos = Vec::with_capacity(parts.prototypes.len());
+                for (mesh, tri_material) in parts.prototypes {
+                    let material = match override_material {
+                        Some(m) => vec![m; mesh.triangles.len()],
+                        None => file_materials(
+                            &parts.materials,
+                            &tri_material,
+                            parts.missing_reason.as_deref(),
+                            file,
+                            &at,
+                            materials,
+                        )?,
+                    };
+                    protos.push(PrototypeMesh {
+                        vertices: mesh.vertices,
+                        triangles: mesh.triangles,
+                        material,
+                    });
+                }
+                let placements = parts
+                    .placements
+                    .iter()
+                    .map(|(p, m)| (*p, DAffine3::from_mat4(*m)))
+                    .collect();
+                (protos, placements)
+            }
+        };
+
+    let copies_total = (copies.len() as u64).saturating_mul(placements.len() as u64);
+    if !mapped {
+        builder.check_instances(copies_total, &at)?;
+        let object_tf = transform.affine();
+        let base = builder.prototypes.len() as u32;
+        builder.prototypes.extend(prototypes);
+        for copy in &copies {
+            for (proto, node) in &placements {
+                let world = *copy * object_tf * *node;
+                if !world.is_finite() || world.matrix3.determinant() == 0.0 {
+                    return Err(Error::input(
+                        &at,
+                        "an instance transform is not finite or not invertible",
+                    ));
+                }
+                builder.placements.push(Placement {
+                    prototype: base + proto,
+                    object,
+                    world,
+                });
+            }
         }
-        (None, None) => return Err(Error::input(&at, "needs `shape` or `file`")),
-        (Some(shape), None) => {
-            let material = override_material.ok_or_else(|| {
-                Error::input(
-                    format!("{at}.material"),
-                    format!("missing (required for shape \"{shape}\")"),
-                )
-            })?;
-            let mesh = builtin_shape(o, shape, &at)?;
-            let per_tri = vec![material; mesh.triangles.len()];
-            (mesh, per_tri)
-        }
-        (None, Some(file)) => {
-            forbid(&shape_keys(o), &[], &at, "a mesh file")?;
-            let mesh_path = base_dir.join(file);
-            let loaded = mesh_io::load_mesh(&mesh_path, &format!("{at}.file"))?;
-            let per_tri = match override_material {
-                Some(m) => vec![m; loaded.mesh.triangles.len()],
-                None => file_materials(&loaded, file, &at, materials)?,
-            };
-            (loaded.mesh, per_tri)
-        }
-    };
+        return Ok(());
+    }
+
+    // Mapped: flattened in f64, as every object was before instancing.
+    let per_copy: u64 = placements
+        .iter()
+        .map(|(p, _)| prototypes[*p as usize].triangles.len() as u64)
+        .sum();
+    builder.check_mapped(per_copy.saturating_mul(copies.len() as u64), &at)?;
+    let mut mesh = Mesh::default();
+    let mut per_tri = Vec::new();
+    for (proto, node) in &placements {
+        let pm = &prototypes[*proto as usize];
+        let base = mesh.vertices.len() as u32;
+        let identity = *node == DAffine3::IDENTITY;
+        mesh.vertices.extend(pm.vertices.iter().map(|p| {
+            if identity {
+                *p
+            } else {
+                node.transform_point3(*p)
+            }
+        }));
+        let mirrored = node.matrix3.determinant() < 0.0;
+        mesh.triangles.extend(pm.triangles.iter().map(|t| {
+            let mut t = t.map(|k| k + base);
+            if mirrored {
+                t.swap(1, 2);
+            }
+            t
+        }));
+        per_tri.extend_from_slice(&pm.material);
+    }
+    if let Some(bad) = mesh.vertices.iter().find(|v| !v.is_finite()) {
+        return Err(Error::input(
+            format!("{at}.file"),
+            format!("vertex {bad} is not finite"),
+        ));
+    }
     transform.apply(&mut mesh.vertices);
-    builder.add(mesh, &per_tri, i as u32, &at)
+    if copies.len() == 1 && copies[0] == DAffine3::IDENTITY {
+        return builder.add(mesh, &per_tri, object, &at);
+    }
+    for copy in &copies {
+        let mirrored = copy.matrix3.determinant() < 0.0;
+        let placed = Mesh {
+            vertices: mesh
+                .vertices
+                .iter()
+                .map(|p| copy.transform_point3(*p))
+                .collect(),
+            triangles: mesh
+                .triangles
+                .iter()
+                .map(|t| if mirrored { [t[0], t[2], t[1]] } else { *t })
+                .collect(),
+        };
+        builder.add(placed, &per_tri, object, &at)?;
+    }
+    Ok(())
+}
+
+/// The copies of an object (applied after its own transform): each `instances` entry
+/// (default: one identity) at each `grid` point (default: the origin only).
+fn copies(o: &ObjectFile, at: &str) -> Result<Vec<DAffine3>> {
+    let list: Vec<DAffine3> = match &o.instances {
+        None => vec![DAffine3::IDENTITY],
+        Some(list) if list.is_empty() => {
+            return Err(Error::input(format!("{at}.instances"), "is empty"));
+        }
+        Some(list) => list
+            .iter()
+            .enumerate()
+            .map(|(k, inst)| instance_transform(inst, &format!("{at}.instances[{k}]")))
+            .collect::<Result<_>>()?,
+    };
+    let Some(grid) = o.grid else {
+        return Ok(list);
+    };
+    let [nx, ny] = grid.count;
+    if nx == 0 || ny == 0 {
+        return Err(Error::input(
+            format!("{at}.grid.count"),
+            format!("zero copies: {:?} (each must be ≥ 1)", grid.count),
+        ));
+    }
+    let total = nx.saturating_mul(ny).saturating_mul(list.len() as u64);
+    if total > MAX_INSTANCES {
+        return Err(Error::input(
+            format!("{at}.grid.count"),
+            format!("{total} copies exceed the limit of {MAX_INSTANCES} instances"),
+        ));
+    }
+    let [dx, dy] = grid.spacing;
+    let mut out = Vec::with_capacity(total as usize);
+    for j in 0..ny {
+        for i in 0..nx {
+            let shift = DVec3::new(i as f64 * dx, j as f64 * dy, 0.0);
+            out.extend(list.iter().map(|m| DAffine3::from_translation(shift) * *m));
+        }
+    }
+    Ok(out)
+}
+
+/// One `instances` entry: scale → rotate → translate; any non-zero scale (negative
+/// mirrors).
+fn instance_transform(inst: &InstanceFile, at: &str) -> Result<DAffine3> {
+    let scale = match inst.scale {
+        None => DVec3::ONE,
+        Some(ScaleFile::Uniform(s)) => DVec3::splat(s),
+        Some(ScaleFile::PerAxis(s)) => vec3(s),
+    };
+    if scale.cmpeq(DVec3::ZERO).any() {
+        return Err(Error::input(format!("{at}.scale"), "must not be 0"));
+    }
+    let t = Transform {
+        scale: DVec3::ONE,
+        rotate_deg: inst.rotate_deg.map_or(DVec3::ZERO, vec3),
+        translate: inst.translate.map_or(DVec3::ZERO, vec3),
+    };
+    Ok(DAffine3::from_mat3_translation(
+        t.rotation() * DMat3::from_diagonal(scale),
+        t.translate,
+    ))
 }
 
 /// Turns a mesh file's own materials into scene materials named `FILE:NAME`; a scene
 /// material of that exact name (defined in `[materials]` or by an earlier object) is reused.
 fn file_materials(
-    loaded: &mesh_io::MeshFile,
+    file_materials: &[mesh_io::FileMaterial],
+    tri_material: &[Option<u32>],
+    missing_reason: Option<&str>,
     file: &str,
     at: &str,
     materials: &mut Vec<Material>,
 ) -> Result<Vec<u32>> {
-    let mut scene_index = Vec::with_capacity(loaded.materials.len());
-    for fm in &loaded.materials {
+    let mut scene_index = Vec::with_capacity(file_materials.len());
+    for fm in file_materials {
         let name = format!("{file}:{}", fm.name);
         let index = match material_index(materials, &name) {
             Some(k) => k,
@@ -344,15 +567,11 @@ fn file_materials(
         };
         scene_index.push(index);
     }
-    loaded
-        .material
+    tri_material
         .iter()
         .map(|m| {
             m.and_then(|k| scene_index.get(k as usize).copied()).ok_or_else(|| {
-                let reason = loaded
-                    .missing_reason
-                    .clone()
-                    .unwrap_or_else(|| "it has no usable material".to_string());
+                let reason = missing_reason.unwrap_or("it has no usable material");
                 Error::input(
                     format!("{at}.material"),
                     format!("`{file}` gives no material ({reason}): set `material = \"...\"` on this object"),

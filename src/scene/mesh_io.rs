@@ -75,6 +75,74 @@ pub struct MeshFile {
 
 /// Loads `path` by extension. `origin` prefixes messages (`scene.toml: objects[1].file`).
 pub fn load_mesh(path: &Path, origin: &str) -> Result<MeshFile> {
+    let parts = load_mesh_parts(path, origin)?;
+    let shown = path.display().to_string();
+    parts
+        .flatten()
+        .map_err(|msg| Error::input(origin, format!("{shown}: {}", super::file::one_line(&msg))))
+}
+
+/// A mesh file as shared meshes and their placements: glTF nodes that use one mesh are
+/// placements of one prototype; an OBJ is one prototype placed once.
+#[derive(Clone, Debug, Default)]
+pub struct MeshParts {
+    /// Per prototype: its mesh in its own frame and its triangles' file materials.
+    pub prototypes: Vec<(Mesh, Vec<Option<u32>>)>,
+    /// (prototype, file-frame transform), in the file's node order.
+    pub placements: Vec<(u32, DMat4)>,
+    pub materials: Vec<FileMaterial>,
+    pub missing_reason: Option<String>,
+}
+
+impl MeshParts {
+    /// Triangles of the flattened file.
+    pub fn flattened_triangle_count(&self) -> u64 {
+        self.placements
+            .iter()
+            .map(|(p, _)| self.prototypes[*p as usize].0.triangles.len() as u64)
+            .sum()
+    }
+
+    /// Every placement copied into one mesh in the file's frame (a mirroring transform
+    /// reverses the winding, glTF spec "Transformations").
+    pub fn flatten(self) -> std::result::Result<MeshFile, String> {
+        let mut out = MeshFile {
+            materials: self.materials,
+            missing_reason: self.missing_reason,
+            ..MeshFile::default()
+        };
+        for (proto, world) in &self.placements {
+            let (mesh, material) = &self.prototypes[*proto as usize];
+            let base = out.mesh.vertices.len();
+            let identity = *world == DMat4::IDENTITY;
+            for p in &mesh.vertices {
+                let p = if identity {
+                    *p
+                } else {
+                    world.transform_point3(*p)
+                };
+                out.mesh.vertices.push(check_vertex(p)?);
+            }
+            let base = u32::try_from(base).map_err(|_| "too many vertices")?;
+            if out.mesh.vertices.len() > u32::MAX as usize {
+                return Err("too many vertices".into());
+            }
+            let mirrored = world.determinant() < 0.0;
+            for t in &mesh.triangles {
+                let mut tri = t.map(|i| i + base);
+                if mirrored {
+                    tri.swap(1, 2);
+                }
+                out.mesh.triangles.push(tri);
+            }
+            out.material.extend_from_slice(material);
+        }
+        Ok(out)
+    }
+}
+
+/// Loads `path` by extension as prototypes and placements, nothing copied.
+pub fn load_mesh_parts(path: &Path, origin: &str) -> Result<MeshParts> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -90,7 +158,15 @@ pub fn load_mesh(path: &Path, origin: &str) -> Result<MeshFile> {
     let fail =
         |msg: String| Error::input(origin, format!("{shown}: {}", super::file::one_line(&msg)));
     let out = match ext.as_str() {
-        "obj" => load_obj(&bytes, path).map_err(fail)?,
+        "obj" => {
+            let file = load_obj(&bytes, path).map_err(fail)?;
+            MeshParts {
+                prototypes: vec![(file.mesh, file.material)],
+                placements: vec![(0, DMat4::IDENTITY)],
+                materials: file.materials,
+                missing_reason: file.missing_reason,
+            }
+        }
         "gltf" | "glb" => load_gltf(&bytes, path).map_err(fail)?,
         _ => {
             return Err(Error::input(
@@ -324,7 +400,9 @@ fn node_matrix(node: &gltf::Node) -> DMat4 {
 
 struct GltfWalk<'a> {
     buffers: Vec<Vec<u8>>,
-    out: MeshFile,
+    out: MeshParts,
+    /// glTF mesh index → prototype, decoded on first use.
+    mesh_slot: Vec<Option<u32>>,
     /// glTF material index → index in `out.materials`.
     material_slot: Vec<Option<u32>>,
     /// Nodes on the current path from the root, to reject cycles.
@@ -359,7 +437,7 @@ fn precheck_gltf(bytes: &[u8]) -> std::result::Result<(), String> {
     Ok(())
 }
 
-fn load_gltf(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> {
+fn load_gltf(bytes: &[u8], path: &Path) -> std::result::Result<MeshParts, String> {
     precheck_gltf(bytes)?;
     let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| format!("malformed glTF: {e}"))?;
     let dir = path.parent().unwrap_or(Path::new(""));
@@ -373,7 +451,8 @@ fn load_gltf(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String>
         .ok_or("the glTF file has no scene")?;
     let mut walk = GltfWalk {
         buffers,
-        out: MeshFile::default(),
+        out: MeshParts::default(),
+        mesh_slot: vec![None; gltf.meshes().len()],
         material_slot: vec![None; gltf.materials().len()],
         stack: Vec::new(),
         doc: &gltf.document,
@@ -395,9 +474,24 @@ impl GltfWalk<'_> {
         }
         self.stack.push(node.index());
         if let Some(mesh) = node.mesh() {
-            for primitive in mesh.primitives() {
-                self.primitive(&primitive, &world)?;
-            }
+            let slot = self
+                .mesh_slot
+                .get(mesh.index())
+                .copied()
+                .ok_or_else(|| format!("mesh {} does not exist", mesh.index()))?;
+            let proto = match slot {
+                Some(p) => p,
+                None => {
+                    let p = self.out.prototypes.len() as u32;
+                    self.out.prototypes.push((Mesh::default(), Vec::new()));
+                    for primitive in mesh.primitives() {
+                        self.primitive(&primitive, p as usize)?;
+                    }
+                    self.mesh_slot[mesh.index()] = Some(p);
+                    p
+                }
+            };
+            self.out.placements.push((proto, world));
         }
         for child in node.children() {
             self.node(&child, world)?;
@@ -409,7 +503,7 @@ impl GltfWalk<'_> {
     fn primitive(
         &mut self,
         primitive: &gltf::Primitive,
-        world: &DMat4,
+        proto: usize,
     ) -> std::result::Result<(), String> {
         use gltf::accessor::{DataType, Dimensions};
         // Lines and points have no area: skip them.
@@ -448,14 +542,13 @@ impl GltfWalk<'_> {
                 indices.len()
             ));
         }
-        // A mirroring transform reverses the winding (glTF spec, "Transformations").
-        let mirrored = world.determinant() < 0.0;
-        let base = self.out.mesh.vertices.len();
-        for p in &local {
-            let p = world.transform_point3(DVec3::from_array(p.map(f64::from)));
-            self.out.mesh.vertices.push(check_vertex(p)?);
-        }
+        let base = self.out.prototypes[proto].0.vertices.len();
         let material = self.material(primitive)?;
+        let (mesh, materials) = &mut self.out.prototypes[proto];
+        for p in &local {
+            mesh.vertices
+                .push(check_vertex(DVec3::from_array(p.map(f64::from)))?);
+        }
         for t in indices.chunks_exact(3) {
             let mut tri = [0u32; 3];
             for (slot, &i) in tri.iter_mut().zip(t) {
@@ -464,11 +557,8 @@ impl GltfWalk<'_> {
                 }
                 *slot = u32::try_from(base + i as usize).map_err(|_| "too many vertices")?;
             }
-            if mirrored {
-                tri.swap(1, 2);
-            }
-            self.out.mesh.triangles.push(tri);
-            self.out.material.push(material);
+            mesh.triangles.push(tri);
+            materials.push(material);
         }
         Ok(())
     }

@@ -1,7 +1,7 @@
 //! Built-in shapes (box, parallelogram, icosphere) as indexed triangle meshes in f64, and
 //! the object transform (scale → rotate → translate) applied to every object's vertices.
 
-use glam::{DMat3, DVec3};
+use glam::{DAffine3, DMat3, DVec3};
 use std::collections::HashMap;
 
 /// An indexed triangle mesh in world (or object) coordinates, f64 until `Geometry`.
@@ -161,6 +161,14 @@ impl Transform {
     pub fn rotation(&self) -> DMat3 {
         let r = self.rotate_deg * (std::f64::consts::PI / 180.0);
         DMat3::from_rotation_z(r.z) * DMat3::from_rotation_y(r.y) * DMat3::from_rotation_x(r.x)
+    }
+
+    /// The transform as one affine map: x ↦ R·(S·x) + t.
+    pub fn affine(&self) -> DAffine3 {
+        DAffine3::from_mat3_translation(
+            self.rotation() * DMat3::from_diagonal(self.scale),
+            self.translate,
+        )
     }
 
     /// Applies the transform to every vertex in place, in f64.

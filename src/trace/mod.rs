@@ -19,9 +19,9 @@ pub mod emit;
 pub mod sampling;
 pub mod scatter;
 
-use crate::accel::{HitBatch, RayBatch, RayCaster, NO_HIT};
+use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng::photon_stream;
-use crate::scene::{Estimator, Scene};
+use crate::scene::{Estimator, Geometry, Scene};
 use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid};
 use bsdf::{Bsdf, LobeKind};
 use emit::Emitters;
@@ -51,12 +51,9 @@ pub fn bounce_cap(max_albedo: f64) -> u32 {
 /// Everything a worker needs to trace photons; shared read-only by all workers.
 pub struct Tracer<'a> {
     caster: &'a dyn RayCaster,
-    vertices: &'a [Vec3],
-    triangles: &'a [[u32; 3]],
-    normals: &'a [Vec3],
-    /// BSDF per triangle's material, looked up through `triangle_material`.
+    geometry: &'a Geometry,
+    /// BSDF per material.
     bsdfs: Vec<Bsdf>,
-    triangle_material: &'a [u32],
     pub emitters: Emitters,
     pub receivers: Vec<ReceiverGrid>,
     seed: u64,
@@ -142,11 +139,8 @@ impl<'a> Tracer<'a> {
             .fold(0.0, f64::max);
         Tracer {
             caster,
-            vertices: &g.vertices,
-            triangles: &g.triangles,
-            normals: &g.normal,
+            geometry: g,
             bsdfs: scene.materials.iter().map(Bsdf::new).collect(),
-            triangle_material: &g.material,
             emitters: Emitters::new(scene),
             receivers,
             seed,
@@ -219,7 +213,6 @@ impl<'a> Tracer<'a> {
         for (k, lane) in s.lanes.iter_mut().enumerate() {
             let origin = DVec3::new(rays.ox[k] as f64, rays.oy[k] as f64, rays.oz[k] as f64);
             let dir = DVec3::new(rays.dx[k] as f64, rays.dy[k] as f64, rays.dz[k] as f64);
-            let tri = hits.tri[k];
             // A receiver lying on a surface (within f32 precision) counts the photons
             // that hit the surface and those that leave it: one placed on a floor
             // measures the floor's illuminance, or its luminance.
@@ -241,21 +234,21 @@ impl<'a> Tracer<'a> {
                     s.pending.push((lane.offset, c.cell, c.score_per_lm * flux));
                 }
             }
-            if tri == NO_HIT {
+            let Some(surface) = hits.surface(k, self.geometry) else {
                 tally.record_history_hits(lane.bounces);
                 continue;
-            }
-            let normal = self.normals[tri as usize];
+            };
+            let normal = surface.normal;
             let back_face = dir.dot(normal.as_dvec3()) > 0.0;
-            tally
-                .deposits
-                .push(deposit_code(tri, back_face, lane.bounces > 0, lane.odd));
-            // Hit point from barycentrics: its error scales with the vertices, which
-            // the origin offset is sized for.
-            let [a, b, c] = self.triangles[tri as usize].map(|i| self.vertices[i as usize]);
-            let p = a + (b - a) * hits.u[k] + (c - a) * hits.v[k];
+            // Unmapped (instanced) objects scatter and occlude but hold no tallies.
+            if let Some(tri) = surface.mapped {
+                tally
+                    .deposits
+                    .push(deposit_code(tri, back_face, lane.bounces > 0, lane.odd));
+            }
+            let p = surface.point;
             let facing = if back_face { -normal } else { normal };
-            let material = self.triangle_material[tri as usize] as usize;
+            let material = surface.material as usize;
             let bsdf = &self.bsdfs[material];
             if bsdf.connectable() {
                 self.connect(
