@@ -359,7 +359,7 @@ fn photon_pass(
     let mut start = resume_start(args, scene, options, out)?;
     start.distributor = distributor;
     let shard = start.shard;
-    if !(args.checkpoint_every > 0.0) {
+    if args.checkpoint_every.is_nan() || args.checkpoint_every <= 0.0 {
         return Err(Error::input(
             "--checkpoint-every",
             format!(
