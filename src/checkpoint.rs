@@ -770,7 +770,7 @@ pub fn merge(
     let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
     let total_flux_lm = tracer.emitters.total_flux_lm;
     let mut tallies = Tallies::new(scene.geometry.triangle_count(), tracer.cell_count());
-    tallies.dark = !(total_flux_lm > 0.0);
+    tallies.dark = total_flux_lm.is_nan() || total_flux_lm <= 0.0;
     let direct = DirectLight {
         emitters: &tracer.emitters,
         caster,

@@ -8,6 +8,9 @@ use crate::checkpoint::SavedPartial;
 use crate::tally::{CellPartial, ChunkTally};
 use serde::{Deserialize, Serialize};
 
+/// Traces chunks (first photon, photons) into their tallies, in this process.
+pub type LocalTracer<'a> = dyn FnMut(&[(u64, u32)], &mut [ChunkTally]) + 'a;
+
 /// Traces an epoch's chunks, some here (`local`), some elsewhere.
 pub trait Distributor {
     /// Fills `results[k]` with chunk `chunks[k]`'s tally; `local` traces chunks here.
@@ -15,7 +18,7 @@ pub trait Distributor {
         &mut self,
         chunks: &[(u64, u32)],
         results: &mut [ChunkTally],
-        local: &mut dyn FnMut(&[(u64, u32)], &mut [ChunkTally]),
+        local: &mut LocalTracer<'_>,
     );
 
     /// Processes sharing the chunks (for epoch sizing).
@@ -107,7 +110,7 @@ pub mod mpi {
             &mut self,
             chunks: &[(u64, u32)],
             results: &mut [ChunkTally],
-            local: &mut dyn FnMut(&[(u64, u32)], &mut [ChunkTally]),
+            local: &mut LocalTracer<'_>,
         ) {
             let size = self.world.size() as usize;
             self.epochs += 1;

@@ -442,7 +442,7 @@ fn photon_pass(
     let mut start = resume_start(args, scene, options, out)?;
     start.distributor = distributor;
     let shard = start.shard;
-    if !(args.checkpoint_every > 0.0) {
+    if args.checkpoint_every.is_nan() || args.checkpoint_every <= 0.0 {
         return Err(Error::input(
             "--checkpoint-every",
             format!(
@@ -913,7 +913,12 @@ fn per_mille(state: &RunState<'_>) -> u64 {
 impl Observer for CliObserver {
     fn epoch(&mut self, state: &RunState<'_>) {
         self.progress.set(per_mille(state), || progress_line(state));
-        if state.stop_reason.is_none() && self.last_save.elapsed().as_secs_f64() >= SAVE_EVERY_S {
+        // A shard's tallies alone are no result: its checkpoint is its only output.
+        let shard = state.resumable.shard.is_some();
+        if !shard
+            && state.stop_reason.is_none()
+            && self.last_save.elapsed().as_secs_f64() >= SAVE_EVERY_S
+        {
             self.last_save = Instant::now();
             if let Err(e) = save_summary(&self.out, state) {
                 self.save_error.get_or_insert(e);
@@ -928,7 +933,7 @@ impl Observer for CliObserver {
             let due = self
                 .last_report
                 .is_none_or(|t| t.elapsed().as_secs_f64() >= every);
-            if state.stop_reason.is_none() && due {
+            if !shard && state.stop_reason.is_none() && due {
                 self.last_report = Some(Instant::now());
                 let written = luxtally::output::summary_value(state)
                     .and_then(|s| luxtally::output::write_live_report(&self.out, &s, every));
