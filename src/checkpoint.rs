@@ -785,7 +785,7 @@ pub fn merge(
         light_flux_lm: tracer.emitters.flux_lm.clone(),
         bounce_cap: tracer.max_bounces,
         threads,
-        next_event: tracer.receivers.iter().map(|g| g.next_event).collect(),
+        estimators: tracer.receivers.iter().map(|g| g.estimator).collect(),
     };
     let start = Instant::now();
     let mut chunk = ChunkTally::default();

@@ -78,8 +78,8 @@ pub struct RunSetup {
     pub light_flux_lm: Vec<f64>,
     pub bounce_cap: u32,
     pub threads: usize,
-    /// Per receiver: scored by next-event estimation (else by track).
-    pub next_event: Vec<bool>,
+    /// Per receiver: what `auto` (or `--estimator`) resolved to.
+    pub estimators: Vec<Estimator>,
 }
 
 /// The state of a run after an epoch.
@@ -276,7 +276,7 @@ pub fn run_from(
         light_flux_lm: tracer.emitters.flux_lm.clone(),
         bounce_cap: tracer.max_bounces,
         threads,
-        next_event: tracer.receivers.iter().map(|g| g.next_event).collect(),
+        estimators: tracer.receivers.iter().map(|g| g.estimator).collect(),
     };
     let (mut stats_s, mut merge_s) = (0.0, 0.0);
     let mut history: Vec<HistoryPoint> = Vec::new();
@@ -483,7 +483,7 @@ pub(crate) fn add_direct(
         return 0.0;
     }
     let start = Instant::now();
-    for grid in tracer.receivers.iter().filter(|g| g.next_event) {
+    for grid in tracer.receivers.iter().filter(|g| g.next_event()) {
         let cells = &mut tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
         tallies.direct_rays +=
             pool.install(|| direct.add_replicates(grid, cells, first, wanted - first));
@@ -495,7 +495,7 @@ pub(crate) fn add_direct(
 /// The direct light's replicates per photon, from the tallies at a schedule point.
 fn schedule_direct(tracer: &Tracer<'_>, tallies: &Tallies) -> DirectSchedule {
     let (mut a, mut b) = (0.0, 0.0);
-    for grid in tracer.receivers.iter().filter(|g| g.next_event) {
+    for grid in tracer.receivers.iter().filter(|g| g.next_event()) {
         let cells = &tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
         let (ga, gb) = relative_variances(cells, tallies.photons, tallies.direct_replicates);
         (a, b) = (a + ga, b + gb);

@@ -1,7 +1,7 @@
 //! summary.json: every key of the contract, plus what a user needs to judge the run.
 
 use crate::run::RunState;
-use crate::scene::Quantity;
+use crate::scene::{Estimator, Quantity};
 use crate::stats::forecast::HistoryPoint;
 use crate::stats::stop::Target;
 use crate::stats::{
@@ -138,12 +138,13 @@ pub fn build(state: &RunState<'_>) -> Summary {
     let scene = state.scene;
     let t = state.tallies;
     let mut receivers = BTreeMap::new();
-    for (index, (r, &next_event)) in scene
+    for (index, (r, &estimator)) in scene
         .receivers
         .iter()
-        .zip(&state.setup.next_event)
+        .zip(&state.setup.estimators)
         .enumerate()
     {
+        let next_event = estimator == Estimator::NextEvent;
         let cells = t.receiver_cells(&scene.receivers, index);
         let stats = receiver_stats(cells, t.counts());
         let direct: Vec<(f64, f64)> = cells
@@ -171,7 +172,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
             ReceiverSummary {
                 quantity,
                 unit,
-                estimator: if next_event { "next_event" } else { "track" },
+                estimator: estimator.name(),
                 direct_estimator: if next_event { "sampled" } else { "track" },
                 indirect_estimator: if next_event { "next_event" } else { "track" },
                 direct: direct.iter().map(|d| d.0).collect(),

@@ -337,6 +337,27 @@ pub enum Estimator {
     Auto,
 }
 
+impl Estimator {
+    /// What a receiver is scored by: `auto` is next-event estimation (sampled direct
+    /// light wherever a source reaches, connections where diffuse paths exist, crossings
+    /// for what neither can score).
+    pub fn resolved(self) -> Estimator {
+        match self {
+            Estimator::Auto => Estimator::NextEvent,
+            e => e,
+        }
+    }
+
+    /// As in the scene file and summary.json.
+    pub fn name(self) -> &'static str {
+        match self {
+            Estimator::Track => "track",
+            Estimator::NextEvent => "next_event",
+            Estimator::Auto => "auto",
+        }
+    }
+}
+
 /// A virtual detector: a grid of cells on a parallelogram; it never blocks light.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Receiver {

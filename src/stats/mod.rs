@@ -4,7 +4,7 @@
 pub mod forecast;
 pub mod stop;
 
-use crate::tally::{CellSums, Counts, Tallies, CODES_PER_TRIANGLE};
+use crate::tally::{CellSums, Counts, Slot, Tallies, CODES_PER_TRIANGLE};
 
 /// Relative error reported for a value of 0 whose σ is known: 100 %, so no relative
 /// target can be met by a quantity nothing has reached.
@@ -208,10 +208,11 @@ pub enum MapKind {
 fn parity_counts(slots: &[u64], kind: MapKind) -> (u64, u64) {
     let (mut odd, mut even) = (0, 0);
     for (slot, &c) in slots.iter().enumerate() {
-        if kind == MapKind::Indirect && slot & 2 == 0 {
+        let slot = Slot::of(slot);
+        if kind == MapKind::Indirect && !slot.indirect {
             continue;
         }
-        if slot & 1 == 1 {
+        if slot.odd_photon {
             odd += c;
         } else {
             even += c;
@@ -231,7 +232,7 @@ pub fn triangle_illuminance_lx(
     parity: Option<bool>,
 ) -> f64 {
     let (n_odd, n_even) = t.odd_even_photons();
-    let slots = &t.triangle_hits[k * CODES_PER_TRIANGLE..(k + 1) * CODES_PER_TRIANGLE];
+    let slots = t.triangle_slots(k);
     let (odd, even) = parity_counts(slots, kind);
     let (count, photons) = match parity {
         None => (odd + even, n_odd + n_even),
@@ -258,12 +259,13 @@ pub fn triangle_face_illuminance_lx(
     if t.photons == 0 || area_m2 <= 0.0 {
         return 0.0;
     }
-    let slots = &t.triangle_hits[k * CODES_PER_TRIANGLE..(k + 1) * CODES_PER_TRIANGLE];
+    let slots = t.triangle_slots(k);
     let count: u64 = slots
         .iter()
         .enumerate()
         .filter(|(slot, _)| {
-            (slot & 4 == 4) == back_face && (kind == MapKind::Total || slot & 2 == 2)
+            let slot = Slot::of(*slot);
+            slot.back_face == back_face && (kind == MapKind::Total || slot.indirect)
         })
         .map(|(_, &c)| c)
         .sum();

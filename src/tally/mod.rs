@@ -83,6 +83,35 @@ pub fn deposit_code(triangle: u32, back_face: bool, indirect: bool, odd_photon: 
         + odd_photon as u32
 }
 
+/// What one slot of a triangle's [`CODES_PER_TRIANGLE`] counts: the decoding of
+/// [`deposit_code`], so the bit layout lives here alone.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Slot {
+    pub back_face: bool,
+    pub indirect: bool,
+    pub odd_photon: bool,
+}
+
+impl Slot {
+    /// The slot at offset `slot` (0..CODES_PER_TRIANGLE) of a triangle's counts.
+    #[inline]
+    pub fn of(slot: usize) -> Slot {
+        Slot {
+            back_face: slot & 4 != 0,
+            indirect: slot & 2 != 0,
+            odd_photon: slot & 1 != 0,
+        }
+    }
+}
+
+impl Tallies {
+    /// Triangle `k`'s photon counts, one per [`Slot`].
+    #[inline]
+    pub fn triangle_slots(&self, k: usize) -> &[u64] {
+        &self.triangle_hits[k * CODES_PER_TRIANGLE..(k + 1) * CODES_PER_TRIANGLE]
+    }
+}
+
 /// Neumaier-compensated f64 sum: stays exact to ~1 ulp over billions of terms.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CompensatedSum {
@@ -269,5 +298,12 @@ mod tests {
         }
         assert_eq!(codes.len(), 24);
         assert_eq!(deposit_code(2, true, true, true), 23);
+        for b in 0..8u32 {
+            let slot = Slot::of(deposit_code(0, b & 4 != 0, b & 2 != 0, b & 1 != 0) as usize);
+            assert_eq!(
+                (slot.back_face, slot.indirect, slot.odd_photon),
+                (b & 4 != 0, b & 2 != 0, b & 1 != 0)
+            );
+        }
     }
 }

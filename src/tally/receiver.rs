@@ -2,7 +2,7 @@
 //! direction is worth to the receiver's quantity, and points on the receiver for
 //! next-event estimation and deterministic direct light.
 
-use crate::scene::{Quantity, Receiver};
+use crate::scene::{Estimator, Quantity, Receiver};
 use crate::trace::sampling::{uniform, uniform_cone_band};
 use glam::DVec3;
 use rand_pcg::Pcg32;
@@ -26,9 +26,9 @@ pub struct ReceiverGrid {
     kind: Kind,
     /// Index of this receiver's first cell among all receivers' cells.
     pub first_cell: u32,
-    /// Scored by next-event estimation (and deterministic direct light) rather than by
-    /// the photons that cross it.
-    pub next_event: bool,
+    /// How it is scored: `Track` or `NextEvent` (sampled direct light, connections),
+    /// never `Auto`.
+    pub estimator: Estimator,
     /// Next-event connections per diffuse vertex, in as many strata of the receiver.
     pub connections: u32,
     /// Vertices closer than this (one cell diagonal) to a receiver point are not
@@ -80,7 +80,7 @@ pub struct Crossing {
 
 impl ReceiverGrid {
     /// Prepares `r` for a frame whose origin is at world position `origin`.
-    pub fn new(r: &Receiver, origin: DVec3, first_cell: u32, next_event: bool) -> ReceiverGrid {
+    pub fn new(r: &Receiver, origin: DVec3, first_cell: u32, estimator: Estimator) -> ReceiverGrid {
         let cross = r.u.cross(r.v);
         let area = cross.length();
         let normal = cross / area;
@@ -111,10 +111,16 @@ impl ReceiverGrid {
             cell_area_m2: area / (r.cells[0] as f64 * r.cells[1] as f64),
             kind,
             first_cell,
-            next_event,
+            estimator,
             connections: connections_for(r.cell_count()),
             near_zone_m: (r.u.length() / r.cells[0] as f64).hypot(r.v.length() / r.cells[1] as f64),
         }
+    }
+
+    /// Scored by next-event estimation rather than by the photons that cross it.
+    #[inline]
+    pub fn next_event(&self) -> bool {
+        self.estimator == Estimator::NextEvent
     }
 
     pub fn cell_count(&self) -> usize {
@@ -255,7 +261,7 @@ mod tests {
 
     #[test]
     fn downward_ray_scores_in_the_cell_below_it() {
-        let g = ReceiverGrid::new(&desk(), DVec3::new(1.0, 1.0, 0.0), 10, false);
+        let g = ReceiverGrid::new(&desk(), DVec3::new(1.0, 1.0, 0.0), 10, Estimator::Track);
         // World (2.6, 2.7) → a = 0.8, b = 0.7 → cell (3, 1).
         let o = DVec3::new(1.6, 1.7, 3.0);
         let c = g.crossing(o, -DVec3::Z, 0.0, 10.0).unwrap();

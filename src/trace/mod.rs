@@ -122,11 +122,8 @@ impl<'a> Tracer<'a> {
             .receivers
             .iter()
             .map(|r| {
-                // `auto` is next-event estimation: sampled direct light wherever a source
-                // reaches, connections where diffuse paths exist, and crossings for what
-                // neither can score (light arriving from a specular surface).
-                let next_event = estimator.unwrap_or(r.estimator) != Estimator::Track;
-                let grid = ReceiverGrid::new(r, g.origin, first_cell, next_event);
+                let scoring = estimator.unwrap_or(r.estimator).resolved();
+                let grid = ReceiverGrid::new(r, g.origin, first_cell, scoring);
                 first_cell += grid.cell_count() as u32;
                 grid
             })
@@ -224,7 +221,7 @@ impl<'a> Tracer<'a> {
                 // Next-event receivers take by crossing only what they do not connect:
                 // light from specular interactions, and diffuse light from vertices in
                 // their near zone.
-                let scores = !r.next_event
+                let scores = !r.next_event()
                     || match lane.segment {
                         Segment::Emitted => false,
                         Segment::Specular => true,
@@ -329,7 +326,7 @@ impl<'a> Tracer<'a> {
         for (r, stratum) in self
             .receivers
             .iter()
-            .filter(|r| r.next_event)
+            .filter(|r| r.next_event())
             .flat_map(|r| (0..r.connections).map(move |s| (r, s)))
         {
             let Some(c) = r.connect(p.as_dvec3(), stratum, &mut lane.rng) else {
