@@ -1,13 +1,15 @@
 //! luxtally: forward Monte Carlo photon tracing that tallies light on scene surfaces and
 //! virtual receivers, and reports, forecasts and controls its own statistical error.
 //!
-//! Data path (each module only uses the ones above it):
-//! `scene` (load and validate) → `accel` (ray casting backends) → `trace` (photon
-//! batches, epochs) → `tally` (receivers and triangle maps) → `stats` (equations of
-//! method.md, forecast, stop criteria) → `output` (summary.json and files) → `render`
-//! (the eye pass: images from a camera). `photometry` reads luminaires' photometric
-//! files (IES LM-63, EULUMDAT) for the scene's lights; `limits` sizes a run from all of
-//! them before it allocates.
+//! Data path: `scene` (load and validate; `photometry` reads luminaires' files for it)
+//! → `accel` (ray casting backends) → `tally` (receivers and triangle maps: where and
+//! what scores) → `trace` (emission, BSDFs, photon batches, direct light) → `stats`
+//! (equations of method.md, forecast, stop criteria) → `run` (epochs) → `output`
+//! (summary.json and files) → `render` (the eye pass). `rng` and `sampling` serve them
+//! all; `limits` sizes a run before it allocates; `checkpoint` and `distributed` save,
+//! resume, shard and spread runs. Each module uses the ones before it, except
+//! `checkpoint`, which `run` calls back, and `photometry`'s polar diagram, drawn with
+//! the output's PNG writer and font.
 
 // `!(x > 0.0)` is deliberate throughout: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -23,6 +25,7 @@ pub mod photometry;
 pub mod render;
 pub mod rng;
 pub mod run;
+pub mod sampling;
 pub mod scene;
 pub mod stats;
 pub mod tally;

@@ -9,7 +9,7 @@ use glam::DVec3;
 use luxtally::photometry::{
     self, c_gamma_deg, Format, Opening, PhotometricType, Photometry, Symmetry,
 };
-use luxtally::trace::sampling::uniform;
+use luxtally::sampling::uniform;
 use rand_pcg::Pcg32;
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};

@@ -22,7 +22,7 @@ pub mod polar;
 mod sample;
 mod text;
 
-use crate::trace::sampling::uniform;
+use crate::sampling::uniform;
 use crate::Result;
 use glam::DVec3;
 use grid::Grid;

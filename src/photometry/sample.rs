@@ -5,7 +5,7 @@
 //! then I(direction)/Φ, with no bias and unit-weight photons.
 
 use super::grid::Grid;
-use crate::trace::sampling::uniform;
+use crate::sampling::uniform;
 use glam::DVec3;
 use rand_pcg::Pcg32;
 

@@ -8,10 +8,10 @@
 use super::map::IndirectField;
 use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng::photon_stream;
+use crate::sampling::uniform;
 use crate::scene::{Camera, Material, Scene};
 use crate::trace::bsdf::{fr_dielectric, Bsdf};
 use crate::trace::emit::{Emitter, Emitters};
-use crate::trace::sampling::uniform;
 use crate::trace::scatter::{offset_origin, reflect, refract};
 use glam::{DVec3, Vec3};
 use rand_pcg::Pcg32;

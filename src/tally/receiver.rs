@@ -2,8 +2,8 @@
 //! direction is worth to the receiver's quantity, and points on the receiver for
 //! next-event estimation and deterministic direct light.
 
+use crate::sampling::{uniform, uniform_cone_band};
 use crate::scene::{Estimator, Quantity, Receiver};
-use crate::trace::sampling::{uniform, uniform_cone_band};
 use glam::DVec3;
 use rand_pcg::Pcg32;
 use std::f64::consts::TAU;

@@ -14,8 +14,8 @@
 //! flux form (pbrt's `TransportMode::Importance`, no 1/η² radiance scaling), as the ideal
 //! glass always was; the factors cancel on any way into and out of a dielectric.
 
-use super::sampling::{cosine_hemisphere, uniform};
 use super::scatter::{reflect, refract};
+use crate::sampling::{cosine_hemisphere, uniform};
 use crate::scene::Material;
 use glam::DVec3;
 use rand_pcg::Pcg32;

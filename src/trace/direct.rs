@@ -14,9 +14,9 @@
 //! on threads or epochs.
 
 use super::emit::Emitters;
-use super::sampling::uniform;
 use crate::accel::{RayBatch, RayCaster};
 use crate::rng::direct_stream;
+use crate::sampling::uniform;
 use crate::tally::{CellSums, ReceiverGrid};
 use glam::DVec3;
 use rand::RngCore;

@@ -1,10 +1,10 @@
 //! Light sources in the local frame: their flux, and the sampling of a photon's origin
 //! and direction from each source's spatial and angular emission density.
 
-use super::sampling::{
+use crate::photometry::Photometry;
+use crate::sampling::{
     cosine_hemisphere, uniform, uniform_cone, uniform_disk, uniform_sphere, SphericalRect,
 };
-use crate::photometry::Photometry;
 use crate::scene::{LightKind, Scene};
 use glam::{DMat3, DVec3};
 use rand_pcg::Pcg32;

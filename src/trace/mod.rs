@@ -16,7 +16,6 @@
 pub mod bsdf;
 pub mod direct;
 pub mod emit;
-pub mod sampling;
 pub mod scatter;
 
 use crate::accel::{HitBatch, RayBatch, RayCaster};

@@ -4,7 +4,7 @@
 //! without self-intersection.
 
 use super::bsdf::{Bsdf, Sample};
-use super::sampling::uniform;
+use crate::sampling::uniform;
 use glam::{DVec3, Vec3};
 use rand_pcg::Pcg32;
 

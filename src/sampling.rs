@@ -1,4 +1,5 @@
-//! Sampling of directions and points, shared by emission and scattering.
+//! Sampling of directions and points, shared by emission, scattering, receivers,
+//! photometry and the eye pass.
 
 use glam::DVec3;
 use rand::RngCore;
