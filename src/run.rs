@@ -3,6 +3,7 @@
 
 use crate::accel::{self, Backend, RayCaster};
 pub use crate::checkpoint::{ChunkRecord, Resumed, ShardRange, Start};
+use crate::distributed::Distributor;
 use crate::scene::{Estimator, Scene};
 use crate::stats::forecast::{forecast, Forecast, HistoryPoint};
 use crate::stats::stop::{min_hits, receiver_target_error, StopReason, Target};
@@ -198,44 +199,7 @@ pub fn run_from(
     observer: &mut dyn Observer,
     start: Start,
 ) -> Result<RunResult> {
-    crate::limits::validate(scene, options)?;
-    let target = match &options.target {
-        Some(t) => Target::parse(t, &scene.receivers)?,
-        None if scene.receivers.is_empty() => Target::Global,
-        None => Target::Receiver { index: 0 },
-    };
-    if options.min_hits.is_some() && target == Target::Global {
-        return Err(Error::input(
-            "--min-hits",
-            "needs a receiver target (--target receiver:NAME)",
-        ));
-    }
-    if let Some(e) = options.target_error {
-        if !(e > 0.0 && e.is_finite()) {
-            return Err(Error::input(
-                "--target-error",
-                format!("{e} is not a positive number"),
-            ));
-        }
-    }
-    if let Some(t) = options.time_limit_s {
-        if !(t > 0.0 && t.is_finite()) {
-            return Err(Error::input(
-                "--time-limit",
-                format!("{t} is not a positive number of seconds"),
-            ));
-        }
-    }
-    let open_ended = options.time_limit_s.is_none()
-        && options.target_error.is_none()
-        && options.min_hits.is_none();
-    let max_photons = options
-        .photons
-        .or(open_ended.then_some(DEFAULT_PHOTONS))
-        .unwrap_or(u64::MAX);
-    if max_photons == 0 {
-        return Err(Error::input("--photons", "must be at least 1"));
-    }
+    let (target, max_photons) = validate(scene, options)?;
     let shard = start.shard;
     let mut distributor = start.distributor;
     // Every process's threads share an epoch's chunks.
@@ -303,42 +267,17 @@ pub fn run_from(
             .min(max_photons - tallies.photons)
             .min(next_schedule_point(tallies.photons) - tallies.photons);
         let epoch_start = Instant::now();
-        let chunks: Vec<(u64, u32)> = (0..count.div_ceil(CHUNK_PHOTONS))
-            .map(|c| {
-                let first = first_photon + tallies.photons + c * CHUNK_PHOTONS;
-                (
-                    first,
-                    CHUNK_PHOTONS.min(first_photon + tallies.photons + count - first) as u32,
-                )
-            })
-            .collect();
-        if buffers.len() < chunks.len() {
-            buffers.resize_with(chunks.len(), ChunkTally::default);
-        }
-        let results = &mut buffers[..chunks.len()];
-        let mut local = |chunks: &[(u64, u32)], results: &mut [ChunkTally]| {
-            pool.install(|| {
-                chunks
-                    .par_iter()
-                    .zip(results.par_iter_mut())
-                    .for_each(|(&(first, n), tally)| {
-                        SCRATCH.with_borrow_mut(|scratch| {
-                            tracer.trace_chunk_into(first, n, scratch, tally)
-                        })
-                    })
-            })
-        };
-        match &mut distributor {
-            Some(d) => d.trace(&chunks, results, &mut local),
-            None => local(&chunks, results),
-        }
-        let merge_start = Instant::now();
-        for (chunk, &(_, n)) in results.iter().zip(&chunks) {
-            tallies.accumulate(chunk, n as u64);
-            if shard.is_some() {
-                chunk_log.push(ChunkRecord::of(chunk, n));
-            }
-        }
+        let first = first_photon + tallies.photons;
+        let merge_start = trace_epoch(
+            &tracer,
+            &pool,
+            first,
+            count,
+            &mut buffers,
+            distributor.as_deref_mut(),
+            &mut tallies,
+            shard.is_some().then_some(&mut chunk_log),
+        );
         merge_s += merge_start.elapsed().as_secs_f64();
         if shard.is_none() {
             direct_s += top_up_direct(&tracer, &direct, &mut tallies, &mut direct_schedule, &pool);
@@ -362,26 +301,16 @@ pub fn run_from(
             *history.last_mut().expect("pushed above") = point;
         }
 
-        let reason = if options.target_error.is_some_and(|goal| error <= goal) {
-            Some(StopReason::TargetError)
-        } else if options.min_hits.is_some_and(|n| {
-            let r = target.receiver().expect("min_hits has a receiver target");
-            min_hits(
-                &target,
-                &scene.receivers,
-                tallies.receiver_cells(&scene.receivers, r),
-            ) >= n
-        }) {
-            Some(StopReason::MinHits)
-        } else if tallies.photons >= max_photons {
-            Some(StopReason::Photons)
-        } else if options.time_limit_s.is_some_and(|t| elapsed_s >= t) {
-            Some(StopReason::Time)
-        } else if interrupt.load(Ordering::Relaxed) {
-            Some(StopReason::Interrupted)
-        } else {
-            None
-        };
+        let reason = stop_reason(
+            scene,
+            options,
+            &target,
+            &tallies,
+            error,
+            max_photons,
+            elapsed_s,
+            interrupt,
+        );
         stats_s += stats_start.elapsed().as_secs_f64();
         observer.epoch(&RunState {
             scene,
@@ -405,20 +334,7 @@ pub fn run_from(
         if let Some(reason) = reason {
             break reason;
         }
-        let hits_goal = options.min_hits.and_then(|n| {
-            let r = target.receiver()?;
-            let fewest = min_hits(
-                &target,
-                &scene.receivers,
-                tallies.receiver_cells(&scene.receivers, r),
-            );
-            // Hits grow in proportion to photons.
-            (fewest > 0).then(|| (tallies.photons as f64 * n as f64 / fewest as f64) as u64)
-        });
-        let goal_photons = [latest_forecast.map(|f| f.photons), hits_goal]
-            .into_iter()
-            .flatten()
-            .min();
+        let goal_photons = goal_photons(scene, options, &target, &tallies, latest_forecast);
         epoch_photons = next_epoch_photons(
             tallies.photons,
             count,
@@ -444,6 +360,161 @@ pub fn run_from(
         shard,
         chunks: chunk_log,
     })
+}
+
+/// Checks the options a run needs beyond the scene's own checks; returns the error
+/// target's subject and the photons to stop at.
+fn validate(scene: &Scene, options: &RunOptions) -> Result<(Target, u64)> {
+    crate::limits::validate(scene, options)?;
+    let target = match &options.target {
+        Some(t) => Target::parse(t, &scene.receivers)?,
+        None if scene.receivers.is_empty() => Target::Global,
+        None => Target::Receiver { index: 0 },
+    };
+    if options.min_hits.is_some() && target == Target::Global {
+        return Err(Error::input(
+            "--min-hits",
+            "needs a receiver target (--target receiver:NAME)",
+        ));
+    }
+    if let Some(e) = options.target_error {
+        if !(e > 0.0 && e.is_finite()) {
+            return Err(Error::input(
+                "--target-error",
+                format!("{e} is not a positive number"),
+            ));
+        }
+    }
+    if let Some(t) = options.time_limit_s {
+        if !(t > 0.0 && t.is_finite()) {
+            return Err(Error::input(
+                "--time-limit",
+                format!("{t} is not a positive number of seconds"),
+            ));
+        }
+    }
+    let open_ended = options.time_limit_s.is_none()
+        && options.target_error.is_none()
+        && options.min_hits.is_none();
+    let max_photons = options
+        .photons
+        .or(open_ended.then_some(DEFAULT_PHOTONS))
+        .unwrap_or(u64::MAX);
+    if max_photons == 0 {
+        return Err(Error::input("--photons", "must be at least 1"));
+    }
+    Ok((target, max_photons))
+}
+
+/// Traces photons `first .. first + count` in fixed chunks (on this process's threads,
+/// or shared out by `distributor`) and folds them into `tallies` in chunk order (and
+/// their records into `chunk_log`, for shards); returns when the merge began.
+#[allow(clippy::too_many_arguments)]
+fn trace_epoch(
+    tracer: &Tracer<'_>,
+    pool: &rayon::ThreadPool,
+    first: u64,
+    count: u64,
+    buffers: &mut Vec<ChunkTally>,
+    distributor: Option<&mut (dyn Distributor + '_)>,
+    tallies: &mut Tallies,
+    chunk_log: Option<&mut Vec<ChunkRecord>>,
+) -> Instant {
+    let chunks: Vec<(u64, u32)> = (0..count.div_ceil(CHUNK_PHOTONS))
+        .map(|c| {
+            let start = first + c * CHUNK_PHOTONS;
+            (start, CHUNK_PHOTONS.min(first + count - start) as u32)
+        })
+        .collect();
+    if buffers.len() < chunks.len() {
+        buffers.resize_with(chunks.len(), ChunkTally::default);
+    }
+    let results = &mut buffers[..chunks.len()];
+    let mut local = |chunks: &[(u64, u32)], results: &mut [ChunkTally]| {
+        pool.install(|| {
+            chunks
+                .par_iter()
+                .zip(results.par_iter_mut())
+                .for_each(|(&(first, n), tally)| {
+                    SCRATCH.with_borrow_mut(|scratch| {
+                        tracer.trace_chunk_into(first, n, scratch, tally)
+                    })
+                })
+        })
+    };
+    match distributor {
+        Some(d) => d.trace(&chunks, results, &mut local),
+        None => local(&chunks, results),
+    }
+    let merge_start = Instant::now();
+    let mut chunk_log = chunk_log;
+    for (chunk, &(_, n)) in results.iter().zip(&chunks) {
+        tallies.accumulate(chunk, n as u64);
+        if let Some(log) = chunk_log.as_deref_mut() {
+            log.push(ChunkRecord::of(chunk, n));
+        }
+    }
+    merge_start
+}
+
+/// The first stop criterion met after an epoch, if any (the target's `error` now).
+#[allow(clippy::too_many_arguments)]
+fn stop_reason(
+    scene: &Scene,
+    options: &RunOptions,
+    target: &Target,
+    tallies: &Tallies,
+    error: f64,
+    max_photons: u64,
+    elapsed_s: f64,
+    interrupt: &AtomicBool,
+) -> Option<StopReason> {
+    if options.target_error.is_some_and(|goal| error <= goal) {
+        Some(StopReason::TargetError)
+    } else if options.min_hits.is_some_and(|n| {
+        target.receiver().is_some_and(|r| {
+            min_hits(
+                target,
+                &scene.receivers,
+                tallies.receiver_cells(&scene.receivers, r),
+            ) >= n
+        })
+    }) {
+        Some(StopReason::MinHits)
+    } else if tallies.photons >= max_photons {
+        Some(StopReason::Photons)
+    } else if options.time_limit_s.is_some_and(|t| elapsed_s >= t) {
+        Some(StopReason::Time)
+    } else if interrupt.load(Ordering::Relaxed) {
+        Some(StopReason::Interrupted)
+    } else {
+        None
+    }
+}
+
+/// The photon count at which a stop is predicted: the error forecast's, or the
+/// projection of `--min-hits` (hits grow in proportion to photons), whichever is
+/// nearer.
+fn goal_photons(
+    scene: &Scene,
+    options: &RunOptions,
+    target: &Target,
+    tallies: &Tallies,
+    forecast: Option<Forecast>,
+) -> Option<u64> {
+    let hits_goal = options.min_hits.and_then(|n| {
+        let r = target.receiver()?;
+        let fewest = min_hits(
+            target,
+            &scene.receivers,
+            tallies.receiver_cells(&scene.receivers, r),
+        );
+        (fewest > 0).then(|| (tallies.photons as f64 * n as f64 / fewest as f64) as u64)
+    });
+    [forecast.map(|f| f.photons), hits_goal]
+        .into_iter()
+        .flatten()
+        .min()
 }
 
 /// The direct light after the photons reached `tallies.photons`: at a schedule point
