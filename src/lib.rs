@@ -7,7 +7,9 @@
 //! method.md, forecast, stop criteria) → `output` (summary.json and files) → `render`
 //! (the eye pass: images from a camera). `photometry` reads luminaires' photometric
 //! files (IES LM-63, EULUMDAT) for the scene's lights; `limits` sizes a run from all of
-//! them before it allocates.
+//! them before it allocates. `raster` (bitmap font, PNG encoder, palettes, quantile) uses
+//! nothing of the crate but its error type; `photometry`, `output` and `render` draw with
+//! it. docs/architecture.md has the whole data path.
 
 // `!(x > 0.0)` is deliberate throughout: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -20,6 +22,7 @@ pub mod error;
 pub mod limits;
 pub mod output;
 pub mod photometry;
+pub mod raster;
 pub mod render;
 pub mod rng;
 pub mod run;

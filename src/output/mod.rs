@@ -1,7 +1,6 @@
 //! Outputs of a run: summary.json (the contract's keys and more), the receivers' EXR,
 //! CSV and PNG files, the scene map (PLY) and report.html (docs/outputs.md).
 
-pub mod colormap;
 pub mod ply;
 pub mod preview;
 pub mod receiver_files;
@@ -65,13 +64,11 @@ pub fn write_run_files(out: &Path, state: &RunState<'_>) -> Result<()> {
         }
     }
     write_atomic(&out.join("scene_map.ply"), &ply::scene_map_ply(state))?;
-    let value =
-        serde_json::to_value(&s).map_err(|e| Error::Unsupported(format!("summary.json: {e}")))?;
-    write_report(out, &value, report::DEFAULT_REFRESH_S)
+    write_report(out, &s, report::DEFAULT_REFRESH_S)
 }
 
 /// report.html and the receivers' PNG previews from summary.json's document.
-pub fn write_report(out: &Path, summary: &Value, refresh_s: f64) -> Result<()> {
+pub fn write_report(out: &Path, summary: &summary::Summary, refresh_s: f64) -> Result<()> {
     let origin = out.join("summary.json").display().to_string();
     let receivers = preview::ReceiverData::from_summary(summary, &origin)?;
     let dir = out.join("receivers");
@@ -86,7 +83,9 @@ pub fn write_report(out: &Path, summary: &Value, refresh_s: f64) -> Result<()> {
             &error,
         )?;
     }
-    write_live_report(out, summary, refresh_s)
+    let value = serde_json::to_value(summary)
+        .map_err(|e| Error::Unsupported(format!("summary.json: {e}")))?;
+    write_live_report(out, &value, refresh_s)
 }
 
 /// report.html alone (during a run: the PNGs wait for the end).
@@ -99,13 +98,7 @@ pub fn write_live_report(out: &Path, summary: &Value, refresh_s: f64) -> Result<
 pub fn rebuild_report(out: &Path) -> Result<()> {
     let path = out.join("summary.json");
     let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
-    let summary: Value = serde_json::from_str(&text)
-        .map_err(|e| Error::input(path.display().to_string(), format!("not JSON: {e}")))?;
-    if !summary.is_object() {
-        return Err(Error::input(
-            path.display().to_string(),
-            "not a JSON object",
-        ));
-    }
+    let summary: summary::Summary = serde_json::from_str(&text)
+        .map_err(|e| Error::input(path.display().to_string(), format!("not a summary: {e}")))?;
     write_report(out, &summary, report::DEFAULT_REFRESH_S)
 }
