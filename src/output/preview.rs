@@ -1,7 +1,8 @@
 //! PNG previews of the receivers, for people who will not open an EXR:
 //! `receivers/NAME.png` (value) and `receivers/NAME_error.png` (relative error), false
 //! colour (viridis) with a colour bar and its numeric scale, drawn with the crate's 3×5
-//! bitmap font (`raster::font`). Built from summary.json's data alone, so `luxtally report` can redo them.
+//! bitmap font (`raster::font`). Built from summary.json's data alone, so `luxtally
+//! report` can redo them.
 //!
 //! Orientation: u to the right, v up (cell j = 0 is the bottom row), as on a plan seen
 //! from the side u × v points to. Scales: value 0 … the largest cell value; relative
