@@ -8,8 +8,10 @@
 //! (summary.json and files) → `render` (the eye pass). `rng` and `sampling` serve them
 //! all; `limits` sizes a run before it allocates; `checkpoint` and `distributed` save,
 //! resume, shard and spread runs. Each module uses the ones before it, except
-//! `checkpoint`, which `run` calls back, and `photometry`'s polar diagram, drawn with
-//! the output's PNG writer and font.
+//! `checkpoint`, which `run` calls back.
+//! `raster` (bitmap font, PNG encoder, palettes, quantile) uses nothing of the crate but
+//! its error type; `photometry`, `output` and `render` draw with it.
+//! docs/architecture.md has the whole data path.
 
 // `!(x > 0.0)` is deliberate throughout: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -22,6 +24,7 @@ pub mod error;
 pub mod limits;
 pub mod output;
 pub mod photometry;
+pub mod raster;
 pub mod render;
 pub mod rng;
 pub mod run;

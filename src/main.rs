@@ -804,7 +804,7 @@ fn print_run(args: &RunArgs, state: &RunState<'_>, out: &Path) {
             s.rays_traced,
             s.elapsed_s,
             s.rays_traced as f64 / s.elapsed_s.max(1e-9) / 1e6,
-            s.stop_reason.unwrap_or("?"),
+            s.stop_reason.as_deref().unwrap_or("?"),
             out.display()
         );
         for (name, r) in &s.receivers {

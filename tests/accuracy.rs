@@ -147,7 +147,7 @@ fn forecast_at_ten_percent_predicts_the_photons_needed_within_three_percent() {
         o.target_error = Some(0.01);
         o.target = Some("receiver:r".into());
     });
-    assert_eq!(s.stop_reason, Some("target_error"));
+    assert_eq!(s.stop_reason.as_deref(), Some("target_error"));
     let needed = s.photons_emitted as f64;
     let early = s
         .history
@@ -177,7 +177,7 @@ fn stop_on_photons_emits_exactly_that_many() {
     let scene = scene(&point_over_plane(4, 4));
     let s = run_until(&scene, |o| o.photons = Some(123_457));
     assert_eq!(
-        (s.stop_reason, s.photons_emitted),
+        (s.stop_reason.as_deref(), s.photons_emitted),
         (Some("photons"), 123_457)
     );
 }
@@ -186,7 +186,7 @@ fn stop_on_photons_emits_exactly_that_many() {
 fn stop_on_time_limit_stops_at_the_first_epoch_past_it() {
     let scene = scene(&point_over_plane(4, 4));
     let s = run_until(&scene, |o| o.time_limit_s = Some(1.0));
-    assert_eq!(s.stop_reason, Some("time"));
+    assert_eq!(s.stop_reason.as_deref(), Some("time"));
     // At the first epoch boundary past the limit (how long an epoch takes depends on the
     // machine's load: no wall-clock bound).
     let n = s.history.len();
@@ -228,7 +228,7 @@ fn stop_on_relative_error_of_receiver_global_and_block() {
             o.target_error = Some(goal);
             o.target = Some(target.into());
         });
-        assert_eq!(s.stop_reason, Some("target_error"), "{target}");
+        assert_eq!(s.stop_reason.as_deref(), Some("target_error"), "{target}");
         assert_eq!(s.target, target);
         assert_stopped_at_first_crossing(&s, goal);
         if target.contains('[') {
@@ -252,7 +252,7 @@ fn stop_on_absolute_error_in_lux() {
         o.absolute = true;
         o.target = Some("receiver:r".into());
     });
-    assert_eq!(s.stop_reason, Some("target_error"));
+    assert_eq!(s.stop_reason.as_deref(), Some("target_error"));
     assert_stopped_at_first_crossing(&s, 5.0);
     let r = &s.receivers["r"];
     let rms_sigma = (r.sigma.iter().map(|x| x * x).sum::<f64>() / r.sigma.len() as f64).sqrt();
@@ -266,7 +266,7 @@ fn stop_on_min_hits_in_a_block() {
         o.min_hits = Some(2000);
         o.target = Some("receiver:r[0..2,0..2]".into());
     });
-    assert_eq!(s.stop_reason, Some("min_hits"));
+    assert_eq!(s.stop_reason.as_deref(), Some("min_hits"));
     let hits = &s.receivers["r"].hits;
     let fewest = [0, 1, 8, 9].map(|k| hits[k]).into_iter().min().unwrap();
     assert!((2000..2100).contains(&fewest), "fewest hits {fewest}");
@@ -281,7 +281,7 @@ fn combined_criteria_first_met_wins() {
         o.target_error = Some(0.01);
     });
     assert_eq!(
-        (s.stop_reason, s.photons_emitted),
+        (s.stop_reason.as_deref(), s.photons_emitted),
         (Some("photons"), 50_000)
     );
     // A loose target comes before a long time limit and a large photon count.
@@ -290,7 +290,7 @@ fn combined_criteria_first_met_wins() {
         o.time_limit_s = Some(60.0);
         o.target_error = Some(0.1);
     });
-    assert_eq!(s.stop_reason, Some("target_error"));
+    assert_eq!(s.stop_reason.as_deref(), Some("target_error"));
 }
 
 #[test]
@@ -301,7 +301,7 @@ fn stop_criteria_are_read_from_the_scene_simulation_table() {
     let mut opts = RunOptions::from_scene(&scene);
     opts.threads = 2;
     let s = run_options(&scene, &opts);
-    assert_eq!(s.stop_reason, Some("target_error"));
+    assert_eq!(s.stop_reason.as_deref(), Some("target_error"));
     assert_eq!(s.target, "receiver:r[0..4,0..4]");
     assert_eq!(s.seed, 7);
     assert_stopped_at_first_crossing(&s, 0.05);

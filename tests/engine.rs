@@ -265,7 +265,10 @@ fn assert_estimators_agree(
         &with(luxtally::scene::Estimator::NextEvent, next_event_photons),
     );
     let (a, b) = (&track.receivers[receiver], &next.receivers[receiver]);
-    assert_eq!((a.estimator, b.estimator), ("track", "next_event"));
+    assert_eq!(
+        (a.estimator.as_str(), b.estimator.as_str()),
+        ("track", "next_event")
+    );
     let z: Vec<f64> = (0..a.values.len())
         .map(|k| (a.values[k] - b.values[k]) / a.sigma[k].hypot(b.sigma[k]))
         .collect();
@@ -357,7 +360,11 @@ fn auto_estimator_is_next_event_with_sampled_direct_light_everywhere() {
     // No diffuse path: the direct light is still sampled, not left to crossings.
     let r = &black.receivers["r"];
     assert_eq!(
-        (r.estimator, r.direct_estimator, r.indirect_estimator),
+        (
+            r.estimator.as_str(),
+            r.direct_estimator.as_str(),
+            r.indirect_estimator.as_str()
+        ),
         ("next_event", "sampled", "next_event")
     );
 }

@@ -366,6 +366,12 @@ fn report_command_rebuilds_report_and_previews_from_summary_json() {
         ] {
             std::fs::remove_file(dir.join(f)).expect("file was written");
         }
+        // An unknown error (NaN, written as null) reads back typed.
+        let path = dir.join("summary.json");
+        let mut json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+        json["receivers"]["desk"]["sigma"][0] = serde_json::Value::Null;
+        std::fs::write(&path, serde_json::to_vec(&json).unwrap()).unwrap();
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_luxtally"))
             .args(["report", dir.to_str().unwrap()])
             .output()

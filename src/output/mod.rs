@@ -1,7 +1,6 @@
 //! Outputs of a run: summary.json (the contract's keys and more), the receivers' EXR,
 //! CSV and PNG files, the scene map (PLY) and report.html (docs/outputs.md).
 
-pub mod colormap;
 pub mod ply;
 pub mod preview;
 pub mod receiver_files;
@@ -141,16 +140,11 @@ pub fn write_run_files_with(out: &Path, state: &RunState<'_>, outputs: Outputs) 
             ply::write_scene_map_ply(state, w)
         })?;
     }
-    if !(outputs.receivers || outputs.report) {
-        return Ok(());
-    }
-    let value =
-        serde_json::to_value(&s).map_err(|e| Error::Unsupported(format!("summary.json: {e}")))?;
     if outputs.receivers {
-        write_receiver_pngs(out, &value)?;
+        write_receiver_pngs(out, &s)?;
     }
     if outputs.report {
-        write_live_report(out, &value, report::DEFAULT_REFRESH_S)?;
+        write_live_report(out, &summary_json(&s)?, report::DEFAULT_REFRESH_S)?;
     }
     Ok(())
 }
@@ -171,14 +165,19 @@ pub fn write_atomic_with(
     std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
 }
 
-/// report.html and the receivers' PNG previews from summary.json's document.
-pub fn write_report(out: &Path, summary: &Value, refresh_s: f64) -> Result<()> {
-    write_receiver_pngs(out, summary)?;
-    write_live_report(out, summary, refresh_s)
+/// summary.json's document as JSON data.
+fn summary_json(summary: &summary::Summary) -> Result<Value> {
+    serde_json::to_value(summary).map_err(|e| Error::Unsupported(format!("summary.json: {e}")))
 }
 
-/// The receivers' PNG previews from summary.json's document.
-fn write_receiver_pngs(out: &Path, summary: &Value) -> Result<()> {
+/// report.html and the receivers' PNG previews from a summary.
+pub fn write_report(out: &Path, summary: &summary::Summary, refresh_s: f64) -> Result<()> {
+    write_receiver_pngs(out, summary)?;
+    write_live_report(out, &summary_json(summary)?, refresh_s)
+}
+
+/// The receivers' PNG previews from a summary.
+fn write_receiver_pngs(out: &Path, summary: &summary::Summary) -> Result<()> {
     let origin = out.join("summary.json").display().to_string();
     let receivers = preview::ReceiverData::from_summary(summary, &origin)?;
     let dir = out.join("receivers");
@@ -206,13 +205,7 @@ pub fn write_live_report(out: &Path, summary: &Value, refresh_s: f64) -> Result<
 pub fn rebuild_report(out: &Path) -> Result<()> {
     let path = out.join("summary.json");
     let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
-    let summary: Value = serde_json::from_str(&text)
-        .map_err(|e| Error::input(path.display().to_string(), format!("not JSON: {e}")))?;
-    if !summary.is_object() {
-        return Err(Error::input(
-            path.display().to_string(),
-            "not a JSON object",
-        ));
-    }
+    let summary: summary::Summary = serde_json::from_str(&text)
+        .map_err(|e| Error::input(path.display().to_string(), format!("not a summary: {e}")))?;
     write_report(out, &summary, report::DEFAULT_REFRESH_S)
 }

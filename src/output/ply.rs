@@ -9,8 +9,10 @@
 //! `indirect` (lx) and `rel_error` (odd/even estimate |E_odd − E_even| / 2 / E, method.md
 //! §3; 1 when unknown), all float (f64 rounded to f32).
 
-use super::colormap::{normalise, viridis};
+use crate::raster::palette::{normalise, viridis};
+use crate::raster::{quantile, Rank};
 use crate::run::RunState;
+use crate::scene::adjacency::VertexFaces;
 use crate::stats::{triangle_illuminance_lx, MapKind, REL_ERROR_UNKNOWN};
 use std::io::Write;
 
@@ -61,25 +63,15 @@ pub fn scene_map_ply(state: &RunState<'_>) -> Vec<u8> {
 pub fn write_scene_map_ply(state: &RunState<'_>, out: &mut impl Write) -> std::io::Result<()> {
     let g = &state.scene.geometry;
     let faces = face_map(state);
-    let mut weight = vec![0.0f64; g.vertices.len()];
-    let mut sum = vec![0.0f64; g.vertices.len()];
-    for ((tri, &a), &e) in g
-        .triangles
-        .iter()
-        .zip(&g.area_m2)
-        .zip(&faces.illuminance_lx)
-    {
-        for &v in tri {
-            weight[v as usize] += a;
-            sum[v as usize] += a * e;
-        }
-    }
-    let vertex_lx: Vec<f64> = sum
-        .iter()
-        .zip(&weight)
-        .map(|(&s, &w)| if w > 0.0 { s / w } else { 0.0 })
+    let adjacent = VertexFaces::new(&g.triangles, g.vertices.len());
+    let vertex_lx: Vec<f64> = (0..g.vertices.len())
+        .map(|v| {
+            adjacent
+                .area_weighted_mean(v, &g.area_m2, |_| true, |j| [faces.illuminance_lx[j]])
+                .map_or(0.0, |[e]| e)
+        })
         .collect();
-    let scale = percentile(&vertex_lx, 0.99);
+    let scale = quantile(&vertex_lx, 0.99, Rank::Nearest, f64::is_finite);
 
     let header = format!(
         "ply\nformat binary_little_endian 1.0\n\
@@ -121,15 +113,4 @@ pub fn write_scene_map_ply(state: &RunState<'_>, out: &mut impl Write) -> std::i
         out.write_all(&record)?;
     }
     Ok(())
-}
-
-/// The `q` quantile (nearest rank) of the finite values, 0 without any.
-fn percentile(values: &[f64], q: f64) -> f64 {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
-    if v.is_empty() {
-        return 0.0;
-    }
-    v.sort_by(f64::total_cmp);
-    let rank = ((q * v.len() as f64).ceil() as usize).clamp(1, v.len());
-    v[rank - 1]
 }

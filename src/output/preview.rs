@@ -1,17 +1,20 @@
 //! PNG previews of the receivers, for people who will not open an EXR:
 //! `receivers/NAME.png` (value) and `receivers/NAME_error.png` (relative error), false
-//! colour (viridis) with a colour bar and its numeric scale, drawn with a built-in 3×5
-//! bitmap font. Built from summary.json's data alone, so `luxtally report` can redo them.
+//! colour (viridis) with a colour bar and its numeric scale, drawn with the crate's 3×5
+//! bitmap font (`raster::font`). Built from summary.json's data alone, so `luxtally
+//! report` can redo them.
 //!
 //! Orientation: u to the right, v up (cell j = 0 is the bottom row), as on a plan seen
 //! from the side u × v points to. Scales: value 0 … the largest cell value; relative
 //! error 0 … the largest cell error, capped at 100 %. Cells without a value (nothing
 //! scored: error unknown) are grey in the error image.
 
-use super::colormap::{normalise, viridis};
+use super::summary::Summary;
+use crate::raster::encode_rgb_png;
+use crate::raster::font::{advance, draw_text};
+use crate::raster::palette::{normalise, viridis};
 use crate::stats::relative_error;
 use crate::{Error, Result};
-use serde_json::Value;
 
 /// A receiver's per-cell data as summary.json holds it (index j * cells[0] + i).
 #[derive(Clone, Debug, PartialEq)]
@@ -25,65 +28,25 @@ pub struct ReceiverData {
 }
 
 impl ReceiverData {
-    /// Every receiver of a summary.json document; `origin` names the file in errors.
-    pub fn from_summary(summary: &Value, origin: &str) -> Result<Vec<ReceiverData>> {
-        let bad = |key: &str, what: &str| Error::input(format!("{origin}: {key}"), what);
-        let Some(receivers) = summary.get("receivers") else {
-            return Ok(Vec::new());
-        };
-        let receivers = receivers
-            .as_object()
-            .ok_or_else(|| bad("receivers", "not an object"))?;
+    /// Every receiver of a summary; `origin` names its file in errors.
+    pub fn from_summary(summary: &Summary, origin: &str) -> Result<Vec<ReceiverData>> {
         let mut out = Vec::new();
-        for (name, r) in receivers {
-            let key = |k: &str| format!("receivers.{name}.{k}");
-            let floats = |k: &str| -> Result<Vec<f64>> {
-                r.get(k)
-                    .and_then(Value::as_array)
-                    .ok_or_else(|| bad(&key(k), "missing or not an array"))?
-                    .iter()
-                    // serde_json writes non-finite numbers as null.
-                    .map(|v| {
-                        if v.is_null() {
-                            Ok(f64::NAN)
-                        } else {
-                            v.as_f64().ok_or_else(|| bad(&key(k), "not a number"))
-                        }
-                    })
-                    .collect()
-            };
-            let cells = r
-                .get("cells")
-                .and_then(Value::as_array)
-                .and_then(|c| Some([c.first()?.as_u64()? as usize, c.get(1)?.as_u64()? as usize]))
-                .ok_or_else(|| bad(&key("cells"), "not two cell counts"))?;
-            let values = floats("values")?;
-            let sigma = floats("sigma")?;
-            let hits = r
-                .get("hits")
-                .and_then(Value::as_array)
-                .ok_or_else(|| bad(&key("hits"), "missing or not an array"))?
-                .iter()
-                .map(|v| v.as_u64().ok_or_else(|| bad(&key("hits"), "not a count")))
-                .collect::<Result<Vec<u64>>>()?;
+        for (name, r) in &summary.receivers {
+            let cells = r.cells.map(|c| c as usize);
             let n = cells[0] * cells[1];
-            if values.len() != n || sigma.len() != n || hits.len() != n {
-                return Err(bad(
-                    &key("values"),
+            if r.values.len() != n || r.sigma.len() != n || r.hits.len() != n {
+                return Err(Error::input(
+                    format!("{origin}: receivers.{name}.values"),
                     "values, sigma and hits must have cells[0] × cells[1] entries",
                 ));
             }
             out.push(ReceiverData {
                 name: name.clone(),
-                unit: r
-                    .get("unit")
-                    .and_then(Value::as_str)
-                    .unwrap_or("")
-                    .to_string(),
+                unit: r.unit.clone(),
                 cells,
-                values,
-                sigma,
-                hits,
+                values: r.values.clone(),
+                sigma: r.sigma.clone(),
+                hits: r.hits.clone(),
             });
         }
         Ok(out)
@@ -132,7 +95,6 @@ pub fn receiver_pngs(r: &ReceiverData) -> Result<(Vec<u8>, Vec<u8>)> {
 const MARGIN: usize = 8;
 const BAR_W: usize = 16;
 const GLYPH_SCALE: usize = 2;
-const ADVANCE: usize = 4 * GLYPH_SCALE;
 const TICKS: usize = 5;
 /// From the bar's edge to its labels, past the 3 px tick marks.
 const LABEL_GAP: usize = 10;
@@ -163,9 +125,9 @@ fn false_colour(
             format_number(v)
         })
         .collect();
-    let label_w = labels.iter().map(|l| l.len()).max().unwrap_or(1) * ADVANCE;
+    let label_w = labels.iter().map(|l| l.len()).max().unwrap_or(1) * advance(GLYPH_SCALE);
     let bar_x = MARGIN + img_w + 12;
-    let width = bar_x + BAR_W + LABEL_GAP + label_w.max(unit.len() * ADVANCE) + MARGIN;
+    let width = bar_x + BAR_W + LABEL_GAP + label_w.max(unit.len() * advance(GLYPH_SCALE)) + MARGIN;
     let height = top + bar_h + MARGIN + 5 * GLYPH_SCALE;
     let mut c = Canvas::new(width, height);
 
@@ -239,71 +201,11 @@ impl Canvas {
     }
 
     fn text(&mut self, x: usize, y: usize, s: &str) {
-        for (n, ch) in s.chars().enumerate() {
-            let rows = glyph(ch);
-            for (gy, row) in rows.iter().enumerate() {
-                for gx in 0..3 {
-                    if row & (4 >> gx) != 0 {
-                        for dy in 0..GLYPH_SCALE {
-                            for dx in 0..GLYPH_SCALE {
-                                self.set(
-                                    x + n * ADVANCE + gx * GLYPH_SCALE + dx,
-                                    y + gy * GLYPH_SCALE + dy,
-                                    [0, 0, 0],
-                                );
-                            }
-                        }
-                    }
-                }
-            }
-        }
+        draw_text(&mut self.rgb, self.width, x, y, s, GLYPH_SCALE, [0, 0, 0]);
     }
 
     fn encode(&self) -> Result<Vec<u8>> {
         encode_rgb_png(self.width, self.height, &self.rgb)
-    }
-}
-
-/// An 8-bit RGB image (`rgb` row by row, 3 bytes a pixel) as PNG bytes.
-pub fn encode_rgb_png(width: usize, height: usize, rgb: &[u8]) -> Result<Vec<u8>> {
-    let mut bytes = Vec::new();
-    let err = |e: png::EncodingError| Error::Unsupported(format!("PNG encoding: {e}"));
-    {
-        let mut enc = png::Encoder::new(&mut bytes, width as u32, height as u32);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut writer = enc.write_header().map_err(err)?;
-        writer.write_image_data(rgb).map_err(err)?;
-        writer.finish().map_err(err)?;
-    }
-    Ok(bytes)
-}
-
-/// 3×5 glyphs, one row per entry, bit 2 = left column. Unknown characters are blank.
-fn glyph(c: char) -> [u8; 5] {
-    match c {
-        '0' => [7, 5, 5, 5, 7],
-        '1' => [2, 6, 2, 2, 7],
-        '2' => [7, 1, 7, 4, 7],
-        '3' => [7, 1, 7, 1, 7],
-        '4' => [5, 5, 7, 1, 1],
-        '5' => [7, 4, 7, 1, 7],
-        '6' => [7, 4, 7, 5, 7],
-        '7' => [7, 1, 1, 1, 1],
-        '8' => [7, 5, 7, 5, 7],
-        '9' => [7, 5, 7, 1, 7],
-        '.' => [0, 0, 0, 0, 2],
-        '-' => [0, 0, 7, 0, 0],
-        '+' => [0, 2, 7, 2, 0],
-        'e' => [0, 7, 7, 4, 7],
-        '%' => [5, 1, 2, 4, 5],
-        'l' => [2, 2, 2, 2, 3],
-        'x' => [0, 0, 5, 2, 5],
-        'c' => [0, 0, 7, 4, 7],
-        'd' => [1, 1, 7, 5, 7],
-        'm' => [0, 0, 7, 7, 5],
-        '/' => [1, 1, 2, 4, 4],
-        _ => [0; 5],
     }
 }
 

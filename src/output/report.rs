@@ -7,7 +7,7 @@
 //! While the run is live (`stop_reason` null) the page carries
 //! `<meta http-equiv="refresh">` and reloads itself; the final page has none.
 
-use super::colormap::anchors_js;
+use crate::raster::palette::anchors_js;
 use crate::{Error, Result};
 use serde_json::Value;
 

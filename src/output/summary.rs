@@ -1,17 +1,20 @@
 //! summary.json: every key of the contract, plus what a user needs to judge the run.
+//! Written by serde and read back typed by `luxtally report`: numbers serde_json wrote
+//! as null (NaN: an unknown error) read back as NaN.
 
 use crate::run::RunState;
 use crate::scene::{Estimator, Quantity};
 use crate::stats::forecast::HistoryPoint;
+use crate::stats::null_as_nan;
 use crate::stats::stop::Target;
 use crate::stats::{
     cell_estimate, cell_vov, figure_of_merit, map_stats, mean_illuminance_sigma_lx,
     mean_illuminance_vov, receiver_stats, reliability, Averaged, MapKind, Reliability,
 };
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct Summary {
     pub scene: String,
     pub backend: String,
@@ -22,10 +25,13 @@ pub struct Summary {
     /// Wall time of the photon pass (s), including the direct light's replicates added
     /// during it; `setup_s` is what came before it: BVH build and the direct light's
     /// pilot replicates.
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub elapsed_s: f64,
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub setup_s: f64,
     /// Null while the run is still going (a summary saved mid-run).
-    pub stop_reason: Option<&'static str>,
+    pub stop_reason: Option<String>,
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub total_flux_lm: f64,
     pub lights: Vec<LightSummary>,
     pub luminaires: Vec<LuminaireSummary>,
@@ -39,13 +45,18 @@ pub struct Summary {
     /// shadow rays (not in `rays_traced`) and seconds (before and during the photons).
     pub direct_replicates: u64,
     pub direct_rays: u64,
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub direct_s: f64,
     /// Seconds of statistics, forecasts and stop checks over all epochs, and their
     /// share of `elapsed_s`.
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub stats_s: f64,
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub stats_share: f64,
     /// Seconds of merging the chunks' tallies at epoch ends, and their share.
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub merge_s: f64,
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub merge_share: f64,
     pub receivers: BTreeMap<String, ReceiverSummary>,
     pub global: GlobalSummary,
@@ -55,50 +66,58 @@ pub struct Summary {
     pub forecast: Option<ForecastSummary>,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct LightSummary {
     pub label: String,
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub flux_lm: f64,
 }
 
 /// A photometric file the scene's luminaires use (once per file).
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct LuminaireSummary {
     pub file: String,
     /// Luminaires of the scene placed from it.
     pub count: usize,
     /// Flux of the file's interpolant (before `multiplier`/`flux_lm`), lm.
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub flux_lm: f64,
     pub light_output_ratio: Option<f64>,
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub peak_cd: f64,
-    pub symmetry: &'static str,
+    pub symmetry: String,
     pub opening: String,
     /// The polar diagram (C0–180, C90–270 in cd/klm), a base64 PNG.
     pub polar_png_base64: String,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct ReceiverSummary {
-    pub quantity: &'static str,
-    pub unit: &'static str,
+    pub quantity: String,
+    pub unit: String,
     /// `track` or `next_event` (what `auto` resolved to).
-    pub estimator: &'static str,
+    pub estimator: String,
     /// How the light arriving straight from the sources is scored: `sampled` (the
     /// direct-light replicates, next_event) or `track`.
-    pub direct_estimator: &'static str,
+    pub direct_estimator: String,
     /// How the light arriving after scattering is scored: `next_event` (connections from
     /// diffuse vertices, crossings after specular ones and near the receiver) or `track`.
-    pub indirect_estimator: &'static str,
+    pub indirect_estimator: String,
     /// The sampled direct part of `values` (0 for track receivers) and its σ, in the
     /// receiver's unit.
+    #[serde(deserialize_with = "null_as_nan::vec")]
     pub direct: Vec<f64>,
+    #[serde(deserialize_with = "null_as_nan::vec")]
     pub direct_sigma: Vec<f64>,
     pub cells: [u32; 2],
     /// Index j * cells[0] + i.
+    #[serde(deserialize_with = "null_as_nan::vec")]
     pub values: Vec<f64>,
     /// null where the error is unknown: nothing scored in the cell.
+    #[serde(deserialize_with = "null_as_nan::vec")]
     pub sigma: Vec<f64>,
     pub hits: Vec<u64>,
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub mean: f64,
     /// Eq. 9; null while some cell's error is unknown (`unknown_cells`).
     pub rel_error: Averaged,
@@ -106,29 +125,38 @@ pub struct ReceiverSummary {
     pub rel_error_known_cells: Averaged,
     pub unknown_cells: usize,
     /// Figure of merit 1/(σ_rel²·t) of the quadratic mean error.
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub fom: f64,
     /// Largest variance of the variance over the cells that scored (MCNP's check:
     /// above 0.1 the σ of that cell is not yet reliable).
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub max_vov: f64,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct GlobalSummary {
     pub triangles: usize,
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub area_m2: f64,
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub mean_illuminance_lx: f64,
     /// Standard error of `mean_illuminance_lx` (from per-history hit counts).
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub mean_sigma_lx: f64,
     /// RMS error of the per-triangle map, σ = d/2 from the odd/even maps (method.md §3).
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub sigma_lx: f64,
     pub rel_error: Averaged,
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub indirect_mean_illuminance_lx: f64,
     pub indirect_rel_error: Averaged,
 }
 
-#[derive(Serialize)]
+#[derive(Serialize, Deserialize)]
 pub struct ForecastSummary {
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub target_error: f64,
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub predicted_total_s: f64,
     pub predicted_photons: u64,
 }
@@ -170,11 +198,11 @@ pub fn build(state: &RunState<'_>) -> Summary {
         receivers.insert(
             r.name.clone(),
             ReceiverSummary {
-                quantity,
-                unit,
-                estimator: estimator.name(),
-                direct_estimator: if next_event { "sampled" } else { "track" },
-                indirect_estimator: if next_event { "next_event" } else { "track" },
+                quantity: quantity.into(),
+                unit: unit.into(),
+                estimator: estimator.name().into(),
+                direct_estimator: if next_event { "sampled" } else { "track" }.into(),
+                indirect_estimator: if next_event { "next_event" } else { "track" }.into(),
                 direct: direct.iter().map(|d| d.0).collect(),
                 direct_sigma: direct.iter().map(|d| d.1).collect(),
                 cells: r.cells,
@@ -203,7 +231,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
         direct_replicates: t.direct_replicates,
         elapsed_s: state.elapsed_s,
         setup_s: state.setup.setup_s,
-        stop_reason: state.stop_reason.map(|r| r.as_str()),
+        stop_reason: state.stop_reason.map(|r| r.as_str().to_string()),
         total_flux_lm: state.setup.total_flux_lm,
         lights: scene
             .lights
@@ -280,7 +308,7 @@ fn luminaires(scene: &crate::scene::Scene) -> Vec<LuminaireSummary> {
             flux_lm: p.flux_lm(),
             light_output_ratio: p.light_output_ratio(),
             peak_cd: p.peak_cd(),
-            symmetry: p.symmetry.describe(),
+            symmetry: p.symmetry.describe().to_string(),
             opening: p.opening.describe(),
             polar_png_base64: crate::photometry::polar::polar_diagram_png(p)
                 .map(|png| base64::engine::general_purpose::STANDARD.encode(png))

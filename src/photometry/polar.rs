@@ -5,8 +5,8 @@
 //! the interpolant (every 0.5°), not just the table's nodes.
 
 use super::Photometry;
-use crate::output::preview::encode_rgb_png;
-use crate::render::font::{draw_text, text_width};
+use crate::raster::encode_rgb_png;
+use crate::raster::font::{draw_text, text_width};
 use crate::{Error, Result};
 use std::path::Path;
 

@@ -2,6 +2,7 @@
 //! the photon pass's tallies; saved as `indirect_map.bin` so `render --from` can reuse a
 //! finished run; and its smooth interpolation across triangles.
 
+use crate::scene::adjacency::VertexFaces;
 use crate::scene::Scene;
 use crate::stats::{triangle_face_illuminance_lx, MapKind};
 use crate::tally::Tallies;
@@ -185,46 +186,17 @@ impl IndirectField {
                 corner_lx: map.face_lx.iter().map(|f| [*f; 3]).collect(),
             };
         }
-        // Vertex → triangles (CSR).
-        let mut start = vec![0usize; g.vertices.len() + 1];
-        for t in &g.triangles {
-            for &i in t {
-                start[i as usize + 1] += 1;
-            }
-        }
-        for i in 0..g.vertices.len() {
-            start[i + 1] += start[i];
-        }
-        let mut fill = start.clone();
-        let mut adjacent = vec![0u32; start[g.vertices.len()]];
-        for (k, t) in g.triangles.iter().enumerate() {
-            for &i in t {
-                adjacent[fill[i as usize]] = k as u32;
-                fill[i as usize] += 1;
-            }
-        }
+        let adjacent = VertexFaces::new(&g.triangles, g.vertices.len());
         let corner_lx = g
             .triangles
             .iter()
             .enumerate()
             .map(|(k, t)| {
                 t.map(|i| {
-                    let (mut sum, mut area) = ([0.0f64; 2], 0.0f64);
-                    for &j in &adjacent[start[i as usize]..start[i as usize + 1]] {
-                        let j = j as usize;
-                        if g.normal[j].dot(g.normal[k]) < CREASE_COS {
-                            continue;
-                        }
-                        let a = g.area_m2[j];
-                        sum[0] += a * map.face_lx[j][0];
-                        sum[1] += a * map.face_lx[j][1];
-                        area += a;
-                    }
-                    if area > 0.0 {
-                        [sum[0] / area, sum[1] / area]
-                    } else {
-                        map.face_lx[k]
-                    }
+                    let same_side = |j: usize| !(g.normal[j].dot(g.normal[k]) < CREASE_COS);
+                    adjacent
+                        .area_weighted_mean(i as usize, &g.area_m2, same_side, |j| map.face_lx[j])
+                        .unwrap_or(map.face_lx[k])
                 })
             })
             .collect();

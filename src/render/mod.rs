@@ -8,7 +8,6 @@
 //! false-colour PNG).
 
 mod eye;
-pub mod font;
 pub mod map;
 pub mod output;
 

@@ -1,8 +1,10 @@
 //! The rendered image's files: `render.exr` (luminance, cd/m², f32), `render.png`
 //! (tone-mapped) and `render_false_colour.png` (log-scale pseudo-colour with a scale).
 
-use super::font::{draw_text, text_width};
 use super::Image;
+use crate::raster::font::{draw_text, text_width};
+use crate::raster::palette::false_colour;
+use crate::raster::{encode_png, quantile, Rank};
 use crate::{Error, Result};
 use std::path::Path;
 
@@ -33,14 +35,9 @@ pub fn log_average_cdm2(l: &[f64]) -> f64 {
     (lit.iter().map(|x| (1e-4 + x).ln()).sum::<f64>() / lit.len() as f64).exp()
 }
 
-/// The `q` quantile of the positive values (0 if none).
-fn quantile(l: &[f64], q: f64) -> f64 {
-    let mut lit: Vec<f64> = l.iter().copied().filter(|x| *x > 0.0).collect();
-    if lit.is_empty() {
-        return 0.0;
-    }
-    lit.sort_by(f64::total_cmp);
-    lit[((lit.len() - 1) as f64 * q).round() as usize]
+/// The `q` quantile of the positive (lit) luminances, 0 if none.
+fn lit_quantile(l: &[f64], q: f64) -> f64 {
+    quantile(l, q, Rank::Rounded, |x| x > 0.0)
 }
 
 /// sRGB transfer function of a linear value in [0, 1].
@@ -63,7 +60,7 @@ pub fn tone_map(image: &Image) -> Vec<u8> {
         return vec![0; l.len()];
     }
     let scale = KEY / avg;
-    let white = (quantile(l, WHITE_PERCENTILE) * scale).max(1e-9);
+    let white = (lit_quantile(l, WHITE_PERCENTILE) * scale).max(1e-9);
     l.iter()
         .map(|&x| {
             let s = x * scale;
@@ -72,6 +69,7 @@ pub fn tone_map(image: &Image) -> Vec<u8> {
         .collect()
 }
 
+/// Writes an 8-bit PNG file.
 fn write_png(
     path: &Path,
     width: usize,
@@ -79,15 +77,9 @@ fn write_png(
     colour: png::ColorType,
     data: &[u8],
 ) -> Result<()> {
-    let io = |e: std::io::Error| Error::io(path, e);
-    let file = std::fs::File::create(path).map_err(io)?;
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width as u32, height as u32);
-    encoder.set_color(colour);
-    encoder.set_depth(png::BitDepth::Eight);
-    let png_error = |e: png::EncodingError| Error::Unsupported(format!("{}: {e}", path.display()));
-    let mut writer = encoder.write_header().map_err(png_error)?;
-    writer.write_image_data(data).map_err(png_error)?;
-    writer.finish().map_err(png_error)
+    let bytes = encode_png(width, height, colour, data)
+        .map_err(|e| Error::Unsupported(format!("{}: {e}", path.display())))?;
+    std::fs::write(path, bytes).map_err(|e| Error::io(path, e))
 }
 
 /// Writes the tone-mapped image (8-bit grey, sRGB).
@@ -101,24 +93,6 @@ pub fn write_tone_mapped_png(image: &Image, path: &Path) -> Result<()> {
     )
 }
 
-/// Pseudo-colour stops from the bottom of the scale to the top.
-const STOPS: [[f64; 3]; 6] = [
-    [0.0, 0.0, 0.5],
-    [0.0, 0.0, 1.0],
-    [0.0, 1.0, 1.0],
-    [0.0, 1.0, 0.0],
-    [1.0, 1.0, 0.0],
-    [1.0, 0.0, 0.0],
-];
-
-fn pseudo_colour(f: f64) -> [u8; 3] {
-    let x = f.clamp(0.0, 1.0) * (STOPS.len() - 1) as f64;
-    let i = (x.floor() as usize).min(STOPS.len() - 2);
-    let t = x - i as f64;
-    let (a, b) = (STOPS[i], STOPS[i + 1]);
-    [0, 1, 2].map(|c| ((a[c] + (b[c] - a[c]) * t) * 255.0).round() as u8)
-}
-
 /// Scale values: 1, 2 and 5 times a power of ten.
 fn nice(k: i32) -> f64 {
     [1.0, 2.0, 5.0][k.rem_euclid(3) as usize] * 10f64.powi(k.div_euclid(3))
@@ -128,7 +102,7 @@ fn nice(k: i32) -> f64 {
 /// first 1-2-5 value at or above the 99.9th percentile, the bottom the last at or below
 /// the 1st percentile, at least one and at most four decades below the top.
 pub fn false_colour_range(l: &[f64]) -> (i32, i32) {
-    let top = quantile(l, 0.999);
+    let top = lit_quantile(l, 0.999);
     if top <= 0.0 {
         return (-3, 0);
     }
@@ -136,7 +110,7 @@ pub fn false_colour_range(l: &[f64]) -> (i32, i32) {
     while nice(hi) < top {
         hi += 1;
     }
-    let bottom = quantile(l, 0.01);
+    let bottom = lit_quantile(l, 0.01);
     let mut lo = hi - 3;
     while lo > hi - 12 && nice(lo) > bottom {
         lo -= 1;
@@ -172,7 +146,7 @@ pub fn write_false_colour_png(image: &Image, path: &Path) -> Result<()> {
             let l = image.luminance_cdm2[y * w + x];
             if l > 0.0 {
                 let at = 3 * (y * width + x);
-                rgb[at..at + 3].copy_from_slice(&pseudo_colour(position(l)));
+                rgb[at..at + 3].copy_from_slice(&false_colour(position(l)));
             }
         }
     }
@@ -185,7 +159,7 @@ pub fn write_false_colour_png(image: &Image, path: &Path) -> Result<()> {
         let f = (bottom - y) as f64 / (bottom - top) as f64;
         for x in bar_x..bar_x + bar_w {
             let at = 3 * (y * width + x);
-            rgb[at..at + 3].copy_from_slice(&pseudo_colour(f));
+            rgb[at..at + 3].copy_from_slice(&false_colour(f));
         }
     }
     for k in lo..=hi {

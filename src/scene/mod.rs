@@ -9,6 +9,7 @@ use glam::{DAffine3, DMat3, DVec3, Vec3};
 use std::path::PathBuf;
 use std::sync::Arc;
 
+pub mod adjacency;
 pub mod file;
 mod load;
 pub mod mesh_io;

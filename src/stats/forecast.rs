@@ -2,11 +2,13 @@
 //! photons ∝ time at the recently measured rate.
 
 /// One epoch's point of the convergence history.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct HistoryPoint {
+    #[serde(deserialize_with = "super::null_as_nan::f64")]
     pub elapsed_s: f64,
     pub photons: u64,
     /// The target's error (relative, or absolute with `--absolute`).
+    #[serde(deserialize_with = "super::null_as_nan::f64")]
     pub rel_error: f64,
     /// Forecast total time and photons to reach the target (absent without a target).
     #[serde(skip_serializing_if = "Option::is_none")]

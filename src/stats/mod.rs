@@ -106,10 +106,29 @@ pub fn variance_of_variance(moments: [f64; 4], n: u64) -> f64 {
     (c4 / (c2 * c2) - 1.0 / nf).max(0.0)
 }
 
+/// Reading back numbers that serde_json wrote as null (it writes NaN and ±∞ so): NaN,
+/// an unknown value, as the statistics write it.
+pub mod null_as_nan {
+    use serde::{Deserialize, Deserializer};
+
+    pub fn f64<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+    }
+
+    pub fn vec<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+        Ok(Vec::<Option<f64>>::deserialize(d)?
+            .into_iter()
+            .map(|x| x.unwrap_or(f64::NAN))
+            .collect())
+    }
+}
+
 /// Mean and mean relative error of a set of cells (eq. 9), by both averagings.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Averaged {
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub arithmetic: f64,
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub quadratic: f64,
 }
 
@@ -364,14 +383,16 @@ pub fn figure_of_merit(rel_error: f64, elapsed_s: f64) -> f64 {
 }
 
 /// Reliability of the target's error, in the spirit of MCNP's tally checks.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Reliability {
     /// FOM of the target now.
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub fom: f64,
     /// FOM now against FOM at half the photons: within ±10 % once σ_rel ∝ 1/sqrt(t).
     pub fom_stable: bool,
     /// Largest variance of the variance among the target's scored cells (or of the
     /// scene mean for `global`).
+    #[serde(deserialize_with = "null_as_nan::f64")]
     pub vov: f64,
     /// The error can be trusted: FOM stable and VOV < 0.1.
     pub reliable: bool,

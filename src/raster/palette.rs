@@ -1,6 +1,8 @@
-//! The perceptual colour map of every false-colour output (PLY vertex colours, PNG
-//! previews, report.html): viridis, 10 anchors of matplotlib's table, interpolated
-//! linearly in sRGB. report.html carries the same anchors (`VIRIDIS` in `COLORMAP_JS`).
+//! The palettes of the false-colour outputs. Maps (PLY vertex colours, receiver PNG
+//! previews, report.html) use viridis: 10 anchors of matplotlib's table, interpolated
+//! linearly in sRGB; report.html carries the same anchors (`VIRIDIS` in `COLORMAP_JS`).
+//! The render's log-scale false-colour image uses the classic luminance scale
+//! ([`false_colour`]: dark blue, blue, cyan, green, yellow, red), as lighting tools do.
 
 /// viridis(k / 9), k = 0..=9, 8-bit sRGB.
 pub const VIRIDIS: [[u8; 3]; 10] = [
@@ -24,6 +26,25 @@ pub fn viridis(t: f64) -> [u8; 3] {
     let f = x - k as f64;
     let (a, b) = (VIRIDIS[k], VIRIDIS[k + 1]);
     std::array::from_fn(|c| (a[c] as f64 + f * (b[c] as f64 - a[c] as f64)).round() as u8)
+}
+
+/// The render's false-colour stops from the bottom of the scale to the top.
+const STOPS: [[f64; 3]; 6] = [
+    [0.0, 0.0, 0.5],
+    [0.0, 0.0, 1.0],
+    [0.0, 1.0, 1.0],
+    [0.0, 1.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [1.0, 0.0, 0.0],
+];
+
+/// Colour of `f` in [0, 1] (clamped) on the render's false-colour scale.
+pub fn false_colour(f: f64) -> [u8; 3] {
+    let x = f.clamp(0.0, 1.0) * (STOPS.len() - 1) as f64;
+    let i = (x.floor() as usize).min(STOPS.len() - 2);
+    let t = x - i as f64;
+    let (a, b) = (STOPS[i], STOPS[i + 1]);
+    [0, 1, 2].map(|c| ((a[c] + (b[c] - a[c]) * t) * 255.0).round() as u8)
 }
 
 /// `t` = value / scale, 0 when the scale is not positive.

@@ -1,5 +1,6 @@
-//! A 3 × 5 pixel bitmap font for the false-colour scale's labels and the photometric
-//! polar diagram: digits, `.`, `-`, `e` and the letters of `cd/m2`, `cd/klm` and `C`.
+//! The crate's one 3 × 5 pixel bitmap font, for the labels of the render's false-colour
+//! scale, the receivers' PNG previews and the photometric polar diagram: digits, `.`,
+//! `-`, `+`, `e`, `%`, `/` and the letters of `cd/m2`, `cd/klm`, `lx` and `C`.
 
 /// Rows of a glyph, top first; bit 2 is the left column.
 fn glyph(c: char) -> Option<[u8; 5]> {
@@ -24,14 +25,22 @@ fn glyph(c: char) -> Option<[u8; 5]> {
         'l' => [0b110, 0b010, 0b010, 0b010, 0b111],
         'C' => [0b111, 0b100, 0b100, 0b100, 0b111],
         '/' => [0b001, 0b001, 0b010, 0b100, 0b100],
+        '+' => [0b000, 0b010, 0b111, 0b010, 0b000],
+        '%' => [0b101, 0b001, 0b010, 0b100, 0b101],
+        'x' => [0b000, 0b000, 0b101, 0b010, 0b101],
         ' ' => [0; 5],
         _ => return None,
     })
 }
 
+/// Horizontal advance of one character drawn at `scale`, pixels (3 columns and a gap).
+pub fn advance(scale: usize) -> usize {
+    4 * scale
+}
+
 /// Width of `text` drawn at `scale`, pixels.
 pub fn text_width(text: &str, scale: usize) -> usize {
-    text.chars().count() * 4 * scale
+    text.chars().count() * advance(scale)
 }
 
 /// Draws `text` into an RGB buffer of width `width` with its top-left at (x, y);
