@@ -415,3 +415,25 @@ fn live_report_reloads_itself_until_the_run_ends() {
     let html = luxtally::output::report::report_html(&s, 3.0).unwrap();
     assert_eq!(html.matches("</script>").count(), 1);
 }
+
+#[test]
+fn report_rebuilds_from_an_older_summary_missing_newer_keys() {
+    // An older summary.json: no direct light, luminaires, unknown-cell or merge keys.
+    let dir = std::env::temp_dir().join(format!("luxtally-old-summary-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let old = r#"{"scene": "office", "backend": "embree", "seed": 1, "threads": 2,
+        "photons_emitted": 1000, "rays_traced": 3000, "elapsed_s": 0.1,
+        "stop_reason": "photons", "total_flux_lm": 12566.4,
+        "receivers": {"desk": {"quantity": "illuminance", "unit": "lx", "cells": [2, 1],
+            "values": [1.0, 2.0], "sigma": [0.1, null], "hits": [3, 0], "mean": 1.5,
+            "rel_error": {"arithmetic": 0.1, "quadratic": 0.1}}},
+        "global": {"triangles": 12, "area_m2": 114.0, "mean_illuminance_lx": 210.0,
+            "rel_error": {"arithmetic": 0.004, "quadratic": 0.0035},
+            "indirect_rel_error": {"arithmetic": 0.006, "quadratic": 0.005}},
+        "history": [], "forecast": null}"#;
+    std::fs::write(dir.join("summary.json"), old).unwrap();
+    luxtally::output::rebuild_report(&dir).expect("an older summary rebuilds");
+    assert!(dir.join("report.html").is_file());
+    assert!(dir.join("receivers/desk.png").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -14,7 +14,9 @@ use crate::stats::{
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-#[derive(Serialize, Deserialize)]
+/// Keys missing from an older summary.json read as their defaults (`luxtally report`).
+#[derive(Serialize, Deserialize, Default)]
+#[serde(default)]
 pub struct Summary {
     pub scene: String,
     pub backend: String,
@@ -66,7 +68,8 @@ pub struct Summary {
     pub forecast: Option<ForecastSummary>,
 }
 
-#[derive(Serialize, Deserialize)]
+#[derive(Serialize, Deserialize, Default)]
+#[serde(default)]
 pub struct LightSummary {
     pub label: String,
     #[serde(deserialize_with = "null_as_nan::f64")]
@@ -74,7 +77,8 @@ pub struct LightSummary {
 }
 
 /// A photometric file the scene's luminaires use (once per file).
-#[derive(Serialize, Deserialize)]
+#[derive(Serialize, Deserialize, Default)]
+#[serde(default)]
 pub struct LuminaireSummary {
     pub file: String,
     /// Luminaires of the scene placed from it.
@@ -91,7 +95,8 @@ pub struct LuminaireSummary {
     pub polar_png_base64: String,
 }
 
-#[derive(Serialize, Deserialize)]
+#[derive(Serialize, Deserialize, Default)]
+#[serde(default)]
 pub struct ReceiverSummary {
     pub quantity: String,
     pub unit: String,
@@ -133,7 +138,8 @@ pub struct ReceiverSummary {
     pub max_vov: f64,
 }
 
-#[derive(Serialize, Deserialize)]
+#[derive(Serialize, Deserialize, Default)]
+#[serde(default)]
 pub struct GlobalSummary {
     pub triangles: usize,
     #[serde(deserialize_with = "null_as_nan::f64")]
@@ -152,7 +158,8 @@ pub struct GlobalSummary {
     pub indirect_rel_error: Averaged,
 }
 
-#[derive(Serialize, Deserialize)]
+#[derive(Serialize, Deserialize, Default)]
+#[serde(default)]
 pub struct ForecastSummary {
     #[serde(deserialize_with = "null_as_nan::f64")]
     pub target_error: f64,

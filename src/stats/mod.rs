@@ -383,7 +383,7 @@ pub fn figure_of_merit(rel_error: f64, elapsed_s: f64) -> f64 {
 }
 
 /// Reliability of the target's error, in the spirit of MCNP's tally checks.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Reliability {
     /// FOM of the target now.
     #[serde(deserialize_with = "null_as_nan::f64")]
