@@ -581,8 +581,8 @@ pub fn fingerprint(scene: &Scene) -> u64 {
     // Debug prints every f64 so that it reads back to the same bits.
     h.eat(
         format!(
-            "{:?}{:?}{:?}",
-            scene.materials, scene.lights, scene.receivers
+            "{:?}{:?}{:?}{:?}",
+            scene.materials, scene.lights, scene.receivers, g.instanced
         )
         .as_bytes(),
     );
