@@ -16,6 +16,7 @@
 pub mod bsdf;
 pub mod direct;
 pub mod emit;
+pub mod receiver;
 pub mod scatter;
 
 use crate::accel::{HitBatch, RayBatch, RayCaster};
