@@ -22,7 +22,7 @@ use crate::scene::Scene;
 use crate::stats::forecast::HistoryPoint;
 use crate::stats::stop::{StopReason, Target};
 use crate::tally::{CellPartial, CellSums, ChunkTally, CompensatedSum, Tallies};
-use crate::trace::direct::{DirectLight, DirectSchedule, PILOT_REPLICATES};
+use crate::trace::direct::{DirectSchedule, PILOT_REPLICATES};
 use crate::trace::{Tracer, CHUNK_PHOTONS};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -763,30 +763,13 @@ pub fn merge(
     }
 
     let threads = options.threads.max(1);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
+    let pool = crate::run::thread_pool(threads)?;
     let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
-    let total_flux_lm = tracer.emitters.total_flux_lm;
-    let mut tallies = Tallies::new(scene.geometry.triangle_count(), tracer.cell_count());
-    tallies.dark = total_flux_lm.is_nan() || total_flux_lm <= 0.0;
-    let direct = DirectLight {
-        emitters: &tracer.emitters,
-        caster,
-        slack: tracer.receiver_slack,
-        seed: options.seed,
-    };
+    let mut tallies = tracer.new_tallies();
+    let direct = tracer.direct_light();
     let mut schedule = DirectSchedule { per_photon: 0.0 };
     let mut direct_s = add_direct(&tracer, &direct, &mut tallies, PILOT_REPLICATES, &pool);
-    let run_setup = RunSetup {
-        setup_s: setup.elapsed().as_secs_f64(),
-        total_flux_lm,
-        light_flux_lm: tracer.emitters.flux_lm.clone(),
-        bounce_cap: tracer.max_bounces,
-        threads,
-        estimators: tracer.receivers.iter().map(|g| g.estimator).collect(),
-    };
+    let run_setup = RunSetup::new(setup, &tracer, threads);
     let start = Instant::now();
     let mut chunk = ChunkTally::default();
     let (mut elapsed_s, mut stats_s) = (0.0, 0.0);
@@ -816,7 +799,13 @@ pub fn merge(
         None if scene.receivers.is_empty() => Target::Global,
         None => Target::Receiver { index: 0 },
     };
-    let error = crate::run::target_error(scene, &target, &tallies, total_flux_lm, options.absolute);
+    let error = crate::run::target_error(
+        scene,
+        &target,
+        &tallies,
+        run_setup.total_flux_lm,
+        options.absolute,
+    );
     let history = vec![HistoryPoint {
         elapsed_s,
         photons: tallies.photons,

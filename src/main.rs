@@ -1135,7 +1135,7 @@ mod cluster {
     use luxtally::run::RunOptions;
     use luxtally::scene::Scene;
     use luxtally::trace::Tracer;
-    use luxtally::{Error, Result};
+    use luxtally::Result;
     use mpi::topology::Communicator;
 
     pub struct Cluster {
@@ -1179,10 +1179,7 @@ mod cluster {
             // Ctrl-C reaches every rank: rank 0 decides when to stop.
             let _ = ctrlc::set_handler(|| {});
             let threads = options.threads.max(1);
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
+            let pool = luxtally::run::thread_pool(threads)?;
             let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
             serve(&self.universe.world(), &tracer, &pool);
             Ok(())

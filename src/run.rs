@@ -9,7 +9,9 @@ use crate::stats::forecast::{forecast, Forecast, HistoryPoint};
 use crate::stats::stop::{min_hits, receiver_target_error, StopReason, Target};
 use crate::stats::{map_stats, MapKind};
 use crate::tally::{ChunkTally, Tallies};
-use crate::trace::direct::{relative_variances, DirectLight, DirectSchedule, PILOT_REPLICATES};
+use crate::trace::direct::{
+    relative_variances, samples_per_replicate, DirectLight, DirectSchedule, PILOT_REPLICATES,
+};
 use crate::trace::{Scratch, Tracer, CHUNK_PHOTONS};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -81,6 +83,28 @@ pub struct RunSetup {
     pub threads: usize,
     /// Per receiver: what `auto` (or `--estimator`) resolved to.
     pub estimators: Vec<Estimator>,
+}
+
+impl RunSetup {
+    /// What `tracer` settled, `setup` being when the run's set-up began.
+    pub(crate) fn new(setup: Instant, tracer: &Tracer<'_>, threads: usize) -> RunSetup {
+        RunSetup {
+            setup_s: setup.elapsed().as_secs_f64(),
+            total_flux_lm: tracer.emitters.total_flux_lm,
+            light_flux_lm: tracer.emitters.flux_lm.clone(),
+            bounce_cap: tracer.max_bounces,
+            threads,
+            estimators: tracer.receivers.iter().map(|g| g.estimator).collect(),
+        }
+    }
+}
+
+/// A pool of `threads` workers for a run's chunks (or a render's tiles).
+pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))
 }
 
 /// The state of a run after an epoch.
@@ -210,38 +234,22 @@ pub fn run_from(
         None => (0, max_photons),
     };
     let threads = options.threads.max(1);
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
+    let pool = thread_pool(threads)?;
     let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
     let total_flux_lm = tracer.emitters.total_flux_lm;
     let resumed = start.resumed;
     let mut tallies = match &resumed {
         Some(r) => r.tallies.clone(),
-        None => Tallies::new(scene.geometry.triangle_count(), tracer.cell_count()),
+        None => tracer.new_tallies(),
     };
-    tallies.dark = !(total_flux_lm > 0.0);
-    let direct = DirectLight {
-        emitters: &tracer.emitters,
-        caster,
-        slack: tracer.receiver_slack,
-        seed: options.seed,
-    };
+    let direct = tracer.direct_light();
     let mut direct_schedule = DirectSchedule {
         per_photon: resumed.as_ref().map_or(0.0, |r| r.direct_per_photon),
     };
     // Shards leave the direct light to the merge; a resumed run has its pilot already.
     let pilot = if shard.is_some() { 0 } else { PILOT_REPLICATES };
     let mut direct_s = add_direct(&tracer, &direct, &mut tallies, pilot, &pool);
-    let run_setup = RunSetup {
-        setup_s: setup.elapsed().as_secs_f64(),
-        total_flux_lm,
-        light_flux_lm: tracer.emitters.flux_lm.clone(),
-        bounce_cap: tracer.max_bounces,
-        threads,
-        estimators: tracer.receivers.iter().map(|g| g.estimator).collect(),
-    };
+    let run_setup = RunSetup::new(setup, &tracer, threads);
     let (mut stats_s, mut merge_s) = (0.0, 0.0);
     let mut history: Vec<HistoryPoint> = Vec::new();
     let mut latest_forecast = None;
@@ -565,8 +573,9 @@ pub(crate) fn add_direct(
 
 /// The direct light's replicates per photon, from the tallies at a schedule point.
 fn schedule_direct(tracer: &Tracer<'_>, tallies: &Tallies) -> DirectSchedule {
-    let (mut a, mut b) = (0.0, 0.0);
+    let (mut a, mut b, mut samples) = (0.0, 0.0, 0);
     for grid in tracer.receivers.iter().filter(|g| g.next_event()) {
+        samples += samples_per_replicate(grid);
         let cells = &tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
         let (ga, gb) = relative_variances(cells, tallies.photons, tallies.direct_replicates);
         (a, b) = (a + ga, b + gb);
@@ -574,7 +583,7 @@ fn schedule_direct(tracer: &Tracer<'_>, tallies: &Tallies) -> DirectSchedule {
     DirectSchedule::from_variances(
         a,
         b,
-        tallies.direct_rays as f64 / tallies.direct_replicates.max(1) as f64,
+        samples as f64,
         tallies.rays as f64 / tallies.photons.max(1) as f64,
     )
 }

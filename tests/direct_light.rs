@@ -457,3 +457,34 @@ fn a_receiver_nothing_reaches_has_unknown_error_and_never_converges() {
     let json = serde_json::to_value(&summary).unwrap();
     assert!(json["receivers"]["below"]["sigma"][0].is_null());
 }
+
+#[test]
+fn a_luminance_meter_looking_at_an_area_source_reads_its_luminance() {
+    // Meters 1 m under a large panel (L = 1000 cd/m²), looking up with a 5° cone that
+    // lies wholly inside the panel's solid angle: each reads L exactly. The sampled
+    // direct light finds the cone in a share of the panel's solid angle only, so its σ
+    // is statistical and must be calibrated.
+    let s = run_scene(
+        r#"
+        [[lights]]
+        type = "area"
+        corner = [-5, -5, 1]
+        u = [0, 10, 0]
+        v = [10, 0, 0]
+        luminance_cdm2 = 1000
+        [[receivers]]
+        name = "meter"
+        corner = [-1, -1, 0]
+        u = [2, 0, 0]
+        v = [0, 2, 0]
+        cells = [10, 10]
+        quantity = "luminance"
+        view_direction = [0, 0, 1]
+        half_angle_deg = 5
+        "#,
+        200_000,
+    );
+    let r = &s.receivers["meter"];
+    assert_eq!(r.direct_estimator, "sampled");
+    assert_matches(r, |_, _| LUMINANCE, "luminance meter under a panel");
+}

@@ -91,10 +91,7 @@ pub fn render_with(
         .step_by(TILE_PIXELS)
         .map(|first| (first, TILE_PIXELS.min(pixels - first)))
         .collect();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.max(1))
-        .build()
-        .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
+    let pool = crate::run::thread_pool(threads.max(1))?;
     let results: Vec<(Vec<f64>, RayCounts)> = pool.install(|| {
         tiles
             .par_iter()

@@ -38,6 +38,13 @@ pub fn points_per_side(cells: usize) -> u32 {
     }
 }
 
+/// Samples (each at most one shadow ray) one replicate draws over `grid`: the cost of
+/// a replicate, whether or not its samples find a light to send a ray to.
+pub fn samples_per_replicate(grid: &ReceiverGrid) -> u64 {
+    let m = points_per_side(grid.cell_count()) as u64;
+    grid.cell_count() as u64 * m * m
+}
+
 /// The light of one replicate's sample: weight of the light chosen, and for area sources
 /// the point of the source it is paired with.
 struct LightChoice {
@@ -282,8 +289,8 @@ impl DirectSchedule {
 
     /// The ratio re-estimated from the tallies: `a`, `b` are the receivers' direct
     /// variance per replicate and photon variance per history, each relative to the
-    /// cells' values and summed over cells; `direct_rays_per_replicate`,
-    /// `rays_per_photon` the costs.
+    /// cells' values and summed over cells; `direct_rays_per_replicate` (samples, see
+    /// [`samples_per_replicate`]), `rays_per_photon` the costs.
     pub fn from_variances(
         a: f64,
         b: f64,

@@ -22,8 +22,9 @@ pub mod scatter;
 use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng::photon_stream;
 use crate::scene::{Estimator, Geometry, Scene};
-use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid};
+use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid, Tallies};
 use bsdf::{Bsdf, LobeKind};
+use direct::DirectLight;
 use emit::Emitters;
 use glam::{DVec3, Vec3};
 use rand_pcg::Pcg32;
@@ -144,6 +145,23 @@ impl<'a> Tracer<'a> {
             max_bounces: bounce_cap(max_albedo),
             scene_scale,
             receiver_slack: 1e-5 * scene_scale as f64,
+        }
+    }
+
+    /// Empty tallies for this scene's triangles and receiver cells.
+    pub fn new_tallies(&self) -> Tallies {
+        let mut t = Tallies::new(self.geometry.triangle_count(), self.cell_count());
+        t.dark = !(self.emitters.total_flux_lm > 0.0);
+        t
+    }
+
+    /// The next-event receivers' direct light, over this tracer's lights and caster.
+    pub fn direct_light(&self) -> DirectLight<'_> {
+        DirectLight {
+            emitters: &self.emitters,
+            caster: self.caster,
+            slack: self.receiver_slack,
+            seed: self.seed,
         }
     }
 
