@@ -9,9 +9,7 @@ use crate::stats::forecast::{forecast, Forecast, HistoryPoint};
 use crate::stats::stop::{min_hits, receiver_target_error, StopReason, Target};
 use crate::stats::{map_stats, MapKind};
 use crate::tally::{ChunkTally, Tallies};
-use crate::trace::direct::{
-    relative_variances, samples_per_replicate, DirectLight, DirectSchedule, PILOT_REPLICATES,
-};
+use crate::trace::direct::{relative_variances, DirectLight, DirectSchedule, PILOT_REPLICATES};
 use crate::trace::{Scratch, Tracer, CHUNK_PHOTONS};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -573,9 +571,8 @@ pub(crate) fn add_direct(
 
 /// The direct light's replicates per photon, from the tallies at a schedule point.
 fn schedule_direct(tracer: &Tracer<'_>, tallies: &Tallies) -> DirectSchedule {
-    let (mut a, mut b, mut samples) = (0.0, 0.0, 0);
+    let (mut a, mut b) = (0.0, 0.0);
     for grid in tracer.receivers.iter().filter(|g| g.next_event()) {
-        samples += samples_per_replicate(grid);
         let cells = &tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
         let (ga, gb) = relative_variances(cells, tallies.photons, tallies.direct_replicates);
         (a, b) = (a + ga, b + gb);
@@ -583,7 +580,7 @@ fn schedule_direct(tracer: &Tracer<'_>, tallies: &Tallies) -> DirectSchedule {
     DirectSchedule::from_variances(
         a,
         b,
-        samples as f64,
+        tallies.direct_rays as f64 / tallies.direct_replicates.max(1) as f64,
         tallies.rays as f64 / tallies.photons.max(1) as f64,
     )
 }

@@ -482,7 +482,7 @@ fn a_luminance_meter_looking_at_an_area_source_reads_its_luminance() {
         view_direction = [0, 0, 1]
         half_angle_deg = 5
         "#,
-        200_000,
+        20_000,
     );
     let r = &s.receivers["meter"];
     assert_eq!(r.direct_estimator, "sampled");

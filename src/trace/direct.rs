@@ -38,13 +38,6 @@ pub fn points_per_side(cells: usize) -> u32 {
     }
 }
 
-/// Samples (each at most one shadow ray) one replicate draws over `grid`: the cost of
-/// a replicate, whether or not its samples find a light to send a ray to.
-pub fn samples_per_replicate(grid: &ReceiverGrid) -> u64 {
-    let m = points_per_side(grid.cell_count()) as u64;
-    grid.cell_count() as u64 * m * m
-}
-
 /// The light of one replicate's sample: weight of the light chosen, and for area sources
 /// the point of the source it is paired with.
 struct LightChoice {
@@ -275,10 +268,10 @@ pub struct DirectSchedule {
     pub per_photon: f64,
 }
 
-/// At most this many direct samples (each at most a shadow ray) per photon ray: the
-/// direct light never takes more than 16/17 of a run, even when photons add nothing to
-/// a receiver (a black room), and the photons still build the scene map.
-const MAX_DIRECT_SAMPLE_SHARE: f64 = 16.0;
+/// At most this many direct shadow rays per photon ray: the direct light never takes
+/// more than 16/17 of a run's rays, even when photons add nothing to a receiver (a
+/// black room), and the photons still build the scene map.
+const MAX_DIRECT_RAY_SHARE: f64 = 16.0;
 
 impl DirectSchedule {
     /// Replicates wanted after `photons` photons (never fewer than `done`).
@@ -289,17 +282,17 @@ impl DirectSchedule {
 
     /// The ratio re-estimated from the tallies: `a`, `b` are the receivers' direct
     /// variance per replicate and photon variance per history, each relative to the
-    /// cells' values and summed over cells; `direct_samples_per_replicate` (see
-    /// [`samples_per_replicate`]) and `rays_per_photon` the costs.
+    /// cells' values and summed over cells; `direct_rays_per_replicate` and
+    /// `rays_per_photon` the costs.
     pub fn from_variances(
         a: f64,
         b: f64,
-        direct_samples_per_replicate: f64,
+        direct_rays_per_replicate: f64,
         rays_per_photon: f64,
     ) -> DirectSchedule {
-        let cap = MAX_DIRECT_SAMPLE_SHARE * rays_per_photon / direct_samples_per_replicate.max(1.0);
+        let cap = MAX_DIRECT_RAY_SHARE * rays_per_photon / direct_rays_per_replicate.max(1.0);
         let optimum = if b > 0.0 {
-            (a * rays_per_photon / (b * direct_samples_per_replicate.max(1.0))).sqrt()
+            (a * rays_per_photon / (b * direct_rays_per_replicate.max(1.0))).sqrt()
         } else {
             cap
         };
@@ -365,7 +358,7 @@ mod tests {
         // Equal variances, direct replicate 4× a photon's rays: R/N = sqrt(1/4) = 1/2.
         let s = DirectSchedule::from_variances(1.0, 1.0, 40.0, 10.0);
         assert!((s.per_photon - 0.5).abs() < 1e-12);
-        // Photons add nothing: the cap, 16 direct samples per photon ray.
+        // Photons add nothing: the cap, 16 direct rays per photon ray.
         let s = DirectSchedule::from_variances(1.0, 0.0, 40.0, 10.0);
         assert!((s.per_photon - 4.0).abs() < 1e-12);
         assert_eq!(s.wanted(1000, 3), 4000);
