@@ -48,6 +48,8 @@ pub fn receiver_exr(name: &str, r: &ReceiverSummary) -> Result<Vec<u8>> {
     let mut bytes = std::io::Cursor::new(Vec::new());
     Image::from_layer(layer)
         .write()
+        // Chunks in file order: the same values give the same bytes.
+        .non_parallel()
         .to_buffered(&mut bytes)
         .map_err(|e| Error::Unsupported(format!("receivers/{name}.exr: {e}")))?;
     Ok(bytes.into_inner())

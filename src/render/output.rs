@@ -22,6 +22,8 @@ pub fn write_exr(image: &Image, path: &Path) -> Result<()> {
         .with_pixel_fn(|p: Vec2<usize>| (l[p.1 * w + p.0] as f32,));
     exr::prelude::Image::from_channels((image.width, image.height), channels)
         .write()
+        // Chunks in file order: the same image gives the same bytes.
+        .non_parallel()
         .to_file(path)
         .map_err(|e| crate::Error::Unsupported(format!("{}: {e}", path.display())))
 }
