@@ -512,11 +512,10 @@ pub fn bench_photons(
             3,
         );
         let options = RunOptions {
-            photons: Some(photons),
             threads: t,
             backend,
             estimator: Some(Estimator::Track),
-            ..RunOptions::from_scene(scene)
+            ..RunOptions::with_photons(scene, photons)
         };
         progress(&format!("{photons} photons, {t} threads"));
         let result = run(scene, &options, &AtomicBool::new(false), &mut ())?;
@@ -549,12 +548,12 @@ pub fn bench_accuracy(
     use crate::run::{run, RunOptions};
     use std::sync::atomic::AtomicBool;
     let options = RunOptions {
-        photons: None,
-        time_limit_s: Some(time_limit_s),
-        target_error: Some(target),
-        target: Some(format!("receiver:{receiver}")),
-        absolute: false,
-        min_hits: None,
+        stop: crate::criteria::StopCriteria {
+            time_limit_s: Some(time_limit_s),
+            target_error: Some(target),
+            target: Some(format!("receiver:{receiver}")),
+            ..Default::default()
+        },
         threads,
         estimator,
         ..RunOptions::from_scene(scene)
@@ -782,11 +781,10 @@ pub fn bench_scale_case(
         2,
     );
     let options = RunOptions {
-        photons: Some(photons),
         threads,
         backend,
         estimator: Some(Estimator::Track),
-        ..RunOptions::from_scene(&scene)
+        ..RunOptions::with_photons(&scene, photons)
     };
     let result = run(&scene, &options, &AtomicBool::new(false), &mut ())?;
     let instances = g.instanced.instances.len() as u64;

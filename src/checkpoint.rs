@@ -402,7 +402,7 @@ impl Checkpoint {
             scene_path: state.scene.path.display().to_string(),
             scene_fingerprint,
             numbers: Numbers::of(state.options),
-            photons_goal: state.options.photons,
+            photons_goal: state.options.stop.photons,
             shard: state.resumable.shard,
             finished: state
                 .stop_reason
@@ -794,7 +794,7 @@ pub fn merge(
         stats_s += c.times_s[1];
     }
     direct_s += top_up_direct(&tracer, &direct, &mut tallies, &mut schedule, &pool);
-    let target = match &options.target {
+    let target = match &options.stop.target {
         Some(t) => Target::parse(t, &scene.receivers)?,
         None if scene.receivers.is_empty() => Target::Global,
         None => Target::Receiver { index: 0 },
@@ -804,7 +804,7 @@ pub fn merge(
         &target,
         &tallies,
         run_setup.total_flux_lm,
-        options.absolute,
+        options.stop.absolute,
     );
     let history = vec![HistoryPoint {
         elapsed_s,

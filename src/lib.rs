@@ -19,6 +19,7 @@
 pub mod accel;
 pub mod bench;
 pub mod checkpoint;
+pub mod criteria;
 pub mod distributed;
 pub mod error;
 pub mod limits;

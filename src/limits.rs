@@ -220,7 +220,7 @@ pub fn photon_pass_estimate(scene: &Scene, options: &RunOptions) -> Estimate {
         .sum();
     let photons = CHUNK_PHOTONS as f64;
     let mut chunks = threads * CHUNKS_PER_THREAD;
-    if let Some(n) = options.photons {
+    if let Some(n) = options.stop.photons {
         chunks = chunks.min((0.25 * n as f64 / photons).ceil());
     }
     let per_chunk = cells.min(photons * SCORES_PER_PHOTON) * size_of::<CellPartial>() as f64

@@ -5,6 +5,7 @@ mod progress;
 use clap::{Parser, Subcommand};
 use luxtally::accel::{self, Backend, RayCaster};
 use luxtally::checkpoint::{Checkpoint, Checkpointer, ShardRange};
+use luxtally::criteria::StopCriteria;
 use luxtally::distributed::Distributor;
 use luxtally::limits;
 use luxtally::output::{summary, write_atomic};
@@ -131,25 +132,9 @@ struct RunArgs {
     /// Output directory (default: out/<scene name>/).
     #[arg(long)]
     out: Option<PathBuf>,
-    /// Photons to emit at most (default: the scene's [simulation] photons; without it and
-    /// without any other stop criterion, 1,000,000).
-    #[arg(long)]
-    photons: Option<u64>,
-    /// Stop after this many seconds of tracing.
-    #[arg(long, allow_negative_numbers = true, value_name = "SECONDS")]
-    time_limit: Option<f64>,
-    /// Stop once the target's error is at most this (relative; absolute with --absolute).
-    #[arg(long, allow_negative_numbers = true, value_name = "FRACTION")]
-    target_error: Option<f64>,
-    /// What the error target applies to: global, receiver:NAME or receiver:NAME[i0..i1,j0..j1].
-    #[arg(long, value_name = "WHAT")]
-    target: Option<String>,
-    /// --target-error is absolute, in the quantity's unit.
-    #[arg(long)]
-    absolute: bool,
-    /// Stop once every cell of the target received this many hits.
-    #[arg(long, value_name = "N")]
-    min_hits: Option<u64>,
+    // When to stop: overrides the scene's `[simulation]` key by key.
+    #[command(flatten)]
+    stop: StopCriteria,
     /// Random seed (default: the scene's [simulation] seed, else 1): the same seed and
     /// photons give the same numbers whatever --threads.
     #[arg(long)]
@@ -338,22 +323,7 @@ fn one_line(s: &str) -> String {
 /// The run's options: the scene's `[simulation]`, overridden by the command line.
 fn run_options(args: &RunArgs, scene: &Scene) -> Result<RunOptions> {
     let mut options = RunOptions::from_scene(scene);
-    if args.photons.is_some() {
-        options.photons = args.photons;
-    }
-    if args.time_limit.is_some() {
-        options.time_limit_s = args.time_limit;
-    }
-    if args.target_error.is_some() {
-        options.target_error = args.target_error;
-    }
-    if args.target.is_some() {
-        options.target = args.target.clone();
-    }
-    options.absolute |= args.absolute;
-    if args.min_hits.is_some() {
-        options.min_hits = args.min_hits;
-    }
+    options.stop = options.stop.overridden_by(&args.stop);
     if let Some(seed) = args.seed {
         options.seed = seed;
     }
@@ -540,12 +510,12 @@ fn resume_start(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path)
         Some(dir) => {
             let (c, path) = Checkpoint::load(dir)?;
             c.check(&path, scene, options)?;
-            if options.photons.is_some_and(|n| n < c.photons()) && c.shard.is_none() {
+            if options.stop.photons.is_some_and(|n| n < c.photons()) && c.shard.is_none() {
                 return Err(Error::input(
                     "--photons",
                     format!(
                         "{} is fewer than the {} photons of {}",
-                        options.photons.unwrap_or(0),
+                        options.stop.photons.unwrap_or(0),
                         c.photons(),
                         path.display()
                     ),
@@ -564,16 +534,14 @@ fn resume_start(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path)
     };
     let shard = match (&args.shard, &resumed) {
         (Some(text), _) => {
-            if options.time_limit_s.is_some()
-                || options.target_error.is_some()
-                || options.min_hits.is_some()
-            {
+            if !options.stop.open_ended() {
                 return Err(Error::input(
                     "--shard",
                     "shards stop on --photons only (no --time-limit, --target-error, --min-hits)",
                 ));
             }
             let total = options
+                .stop
                 .photons
                 .ok_or_else(|| Error::input("--shard", "needs --photons"))?;
             Some(ShardRange::parse(text, total)?)
@@ -582,7 +550,7 @@ fn resume_start(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path)
         (None, None) => None,
     };
     if let Some(c) = &resumed {
-        if c.shard != shard || (shard.is_some() && c.photons_goal != options.photons) {
+        if c.shard != shard || (shard.is_some() && c.photons_goal != options.stop.photons) {
             return Err(Error::input(
                 "--shard",
                 "differs from the checkpoint's shard or its --photons",
@@ -619,7 +587,7 @@ fn merge_command(
     let numbers = &shards[0].1.numbers;
     let mut options = RunOptions::from_scene(&scene);
     options.seed = numbers.seed;
-    options.photons = shards[0].1.photons_goal;
+    options.stop.photons = shards[0].1.photons_goal;
     options.backend = numbers.backend.parse()?;
     options.estimator = match numbers.estimator.as_deref() {
         None => None,
@@ -865,9 +833,10 @@ fn remaining_s(state: &RunState<'_>) -> Option<f64> {
     let by_forecast = state.forecast.map(|f| f.total_s - state.elapsed_s);
     let by_photons = state
         .options
+        .stop
         .photons
         .map(|n| n.saturating_sub(state.tallies.photons) as f64 / rate);
-    let by_time = state.options.time_limit_s.map(|t| t - state.elapsed_s);
+    let by_time = state.options.stop.time_limit_s.map(|t| t - state.elapsed_s);
     [by_forecast, by_photons, by_time]
         .into_iter()
         .flatten()
@@ -880,10 +849,19 @@ fn remaining_s(state: &RunState<'_>) -> Option<f64> {
 /// should end first (what a narrow terminal cuts is the rest: photons, ray rate).
 fn progress_line(state: &RunState<'_>) -> String {
     let error = state.history.last().map_or(f64::NAN, |p| p.rel_error);
-    let unit = if state.options.absolute { "" } else { " %" };
-    let scale = if state.options.absolute { 1.0 } else { 100.0 };
+    let unit = if state.options.stop.absolute {
+        ""
+    } else {
+        " %"
+    };
+    let scale = if state.options.stop.absolute {
+        1.0
+    } else {
+        100.0
+    };
     let goal = state
         .options
+        .stop
         .target_error
         .map(|g| format!(" → {:.3}{unit}", g * scale))
         .unwrap_or_default();

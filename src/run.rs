@@ -3,6 +3,7 @@
 
 use crate::accel::{self, Backend, RayCaster};
 pub use crate::checkpoint::{ChunkRecord, Resumed, ShardRange, Start};
+use crate::criteria::{self, StopCriteria};
 use crate::distributed::Distributor;
 use crate::scene::{Estimator, Scene};
 use crate::stats::forecast::{forecast, Forecast, HistoryPoint};
@@ -22,19 +23,12 @@ thread_local! {
     static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
 }
 
-/// Photons when neither the command line nor the scene says how many, and no other
-/// criterion can end the run.
-pub const DEFAULT_PHOTONS: u64 = 1_000_000;
+pub use crate::criteria::DEFAULT_PHOTONS;
 
-/// How a run is made and when it stops. `None` criteria are off.
+/// How a run is made and when it stops.
 #[derive(Clone, Debug)]
 pub struct RunOptions {
-    pub photons: Option<u64>,
-    pub time_limit_s: Option<f64>,
-    pub target_error: Option<f64>,
-    pub target: Option<String>,
-    pub absolute: bool,
-    pub min_hits: Option<u64>,
+    pub stop: StopCriteria,
     pub seed: u64,
     pub threads: usize,
     pub backend: Backend,
@@ -45,19 +39,21 @@ pub struct RunOptions {
 impl RunOptions {
     /// The scene's `[simulation]` settings, for the command line to override.
     pub fn from_scene(scene: &Scene) -> RunOptions {
-        let s = &scene.simulation;
         RunOptions {
-            photons: s.photons,
-            time_limit_s: s.time_limit_s,
-            target_error: s.target_error,
-            target: s.target.clone(),
-            absolute: s.absolute,
-            min_hits: s.min_hits,
-            seed: s.seed,
+            stop: scene.simulation.stop.clone(),
+            seed: scene.simulation.seed,
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             backend: Backend::Embree,
             estimator: None,
         }
+    }
+
+    /// [`RunOptions::from_scene`] stopping at `photons` (and on the scene's other
+    /// criteria).
+    pub fn with_photons(scene: &Scene, photons: u64) -> RunOptions {
+        let mut options = RunOptions::from_scene(scene);
+        options.stop.photons = Some(photons);
+        options
     }
 }
 
@@ -291,7 +287,13 @@ pub fn run_from(
         let elapsed_s = elapsed_before_s + start.elapsed().as_secs_f64();
         let stats_start = Instant::now();
 
-        let error = target_error(scene, &target, &tallies, total_flux_lm, options.absolute);
+        let error = target_error(
+            scene,
+            &target,
+            &tallies,
+            total_flux_lm,
+            options.stop.absolute,
+        );
         let mut point = HistoryPoint {
             elapsed_s,
             photons: tallies.photons,
@@ -300,7 +302,7 @@ pub fn run_from(
             forecast_photons: None,
         };
         history.push(point);
-        if let Some(goal) = options.target_error {
+        if let Some(goal) = options.stop.target_error {
             latest_forecast = forecast(&history, goal);
             point.forecast_s = latest_forecast.map(|f| f.total_s);
             point.forecast_photons = latest_forecast.map(|f| f.photons);
@@ -346,7 +348,7 @@ pub fn run_from(
             count,
             epoch_start.elapsed().as_secs_f64(),
             elapsed_s,
-            options.time_limit_s,
+            options.stop.time_limit_s,
             goal_photons,
             threads * processes,
         );
@@ -372,43 +374,19 @@ pub fn run_from(
 /// target's subject and the photons to stop at.
 fn validate(scene: &Scene, options: &RunOptions) -> Result<(Target, u64)> {
     crate::limits::validate(scene, options)?;
-    let target = match &options.target {
+    let target = match &options.stop.target {
         Some(t) => Target::parse(t, &scene.receivers)?,
         None if scene.receivers.is_empty() => Target::Global,
         None => Target::Receiver { index: 0 },
     };
-    if options.min_hits.is_some() && target == Target::Global {
+    if options.stop.min_hits.is_some() && target == Target::Global {
         return Err(Error::input(
             "--min-hits",
             "needs a receiver target (--target receiver:NAME)",
         ));
     }
-    if let Some(e) = options.target_error {
-        if !(e > 0.0 && e.is_finite()) {
-            return Err(Error::input(
-                "--target-error",
-                format!("{e} is not a positive number"),
-            ));
-        }
-    }
-    if let Some(t) = options.time_limit_s {
-        if !(t > 0.0 && t.is_finite()) {
-            return Err(Error::input(
-                "--time-limit",
-                format!("{t} is not a positive number of seconds"),
-            ));
-        }
-    }
-    let open_ended = options.time_limit_s.is_none()
-        && options.target_error.is_none()
-        && options.min_hits.is_none();
-    let max_photons = options
-        .photons
-        .or(open_ended.then_some(DEFAULT_PHOTONS))
-        .unwrap_or(u64::MAX);
-    if max_photons == 0 {
-        return Err(Error::input("--photons", "must be at least 1"));
-    }
+    options.stop.validate(criteria::flag)?;
+    let max_photons = options.stop.max_photons();
     Ok((target, max_photons))
 }
 
@@ -475,9 +453,9 @@ fn stop_reason(
     elapsed_s: f64,
     interrupt: &AtomicBool,
 ) -> Option<StopReason> {
-    if options.target_error.is_some_and(|goal| error <= goal) {
+    if options.stop.target_error.is_some_and(|goal| error <= goal) {
         Some(StopReason::TargetError)
-    } else if options.min_hits.is_some_and(|n| {
+    } else if options.stop.min_hits.is_some_and(|n| {
         target.receiver().is_some_and(|r| {
             min_hits(
                 target,
@@ -489,7 +467,7 @@ fn stop_reason(
         Some(StopReason::MinHits)
     } else if tallies.photons >= max_photons {
         Some(StopReason::Photons)
-    } else if options.time_limit_s.is_some_and(|t| elapsed_s >= t) {
+    } else if options.stop.time_limit_s.is_some_and(|t| elapsed_s >= t) {
         Some(StopReason::Time)
     } else if interrupt.load(Ordering::Relaxed) {
         Some(StopReason::Interrupted)
@@ -508,7 +486,7 @@ fn goal_photons(
     tallies: &Tallies,
     forecast: Option<Forecast>,
 ) -> Option<u64> {
-    let hits_goal = options.min_hits.and_then(|n| {
+    let hits_goal = options.stop.min_hits.and_then(|n| {
         let r = target.receiver()?;
         let fewest = min_hits(
             target,

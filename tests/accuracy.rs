@@ -5,6 +5,7 @@ mod common;
 
 use common::*;
 use luxtally::accel::Backend;
+use luxtally::criteria::StopCriteria;
 use luxtally::run::{run, RunOptions};
 use luxtally::scene::Scene;
 use luxtally::stats::{triangle_illuminance_lx, MapKind};
@@ -132,11 +133,11 @@ fn global_odd_even_error_matches_the_actual_map_error() {
 
 fn run_until(
     scene: &Scene,
-    change: impl FnOnce(&mut RunOptions),
+    change: impl FnOnce(&mut StopCriteria),
 ) -> luxtally::output::summary::Summary {
     let mut opts = options(scene, 0, 2, Backend::Embree);
-    opts.photons = None;
-    change(&mut opts);
+    opts.stop.photons = None;
+    change(&mut opts.stop);
     run_options(scene, &opts)
 }
 

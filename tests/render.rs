@@ -75,10 +75,7 @@ resolution = [48, 36]
 fn floor_under_point_source_shows_rho_i_cos_over_pi_r2() {
     let s = scene(FLOOR);
     // A lone plane: no photon comes back to it, so its indirect map is exactly zero.
-    let options = RunOptions {
-        photons: Some(20_000),
-        ..RunOptions::from_scene(&s)
-    };
+    let options = RunOptions::with_photons(&s, 20_000);
     let result = run(&s, &options, &AtomicBool::new(false), &mut ()).unwrap();
     let map = IndirectMap::from_tallies(&s, &result.tallies, result.setup.total_flux_lm);
     assert!(map.face_lx.iter().all(|f| f == &[0.0, 0.0]));
@@ -257,9 +254,8 @@ resolution = [32, 24]
 fn closed_box_wall_shows_direct_plus_indirect_map() {
     let mut s = scene(BOX);
     let options = RunOptions {
-        photons: Some(400_000),
         threads: 2,
-        ..RunOptions::from_scene(&s)
+        ..RunOptions::with_photons(&s, 400_000)
     };
     let result = run(&s, &options, &AtomicBool::new(false), &mut ()).unwrap();
     let map = IndirectMap::from_tallies(&s, &result.tallies, result.setup.total_flux_lm);
@@ -347,9 +343,8 @@ fn office_image_is_stored_as_an_artifact() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/office.toml");
     let s = luxtally::scene::load(&path).unwrap();
     let options = RunOptions {
-        photons: Some(300_000),
         threads: 2,
-        ..RunOptions::from_scene(&s)
+        ..RunOptions::with_photons(&s, 300_000)
     };
     let result = run(&s, &options, &AtomicBool::new(false), &mut ()).unwrap();
     let map = IndirectMap::from_tallies(&s, &result.tallies, result.setup.total_flux_lm);
@@ -382,9 +377,8 @@ fn both_backends_give_the_same_image() {
     let c = s.camera.as_mut().unwrap();
     c.resolution = [160, 120];
     let options = RunOptions {
-        photons: Some(100_000),
         threads: 2,
-        ..RunOptions::from_scene(&s)
+        ..RunOptions::with_photons(&s, 100_000)
     };
     let result = run(&s, &options, &AtomicBool::new(false), &mut ()).unwrap();
     let map = IndirectMap::from_tallies(&s, &result.tallies, result.setup.total_flux_lm);

@@ -68,7 +68,7 @@ fn bundled_office_scene_loads_as_the_contract_describes() {
     assert_eq!((desk.name.as_str(), desk.cells), ("desk", [64, 32]));
     assert_eq!(desk.quantity, Quantity::Illuminance);
     assert_eq!(desk.estimator, Estimator::Auto);
-    assert_eq!(s.simulation.photons, Some(1_000_000));
+    assert_eq!(s.simulation.stop.photons, Some(1_000_000));
     assert_eq!(s.simulation.seed, 1);
     let wall = &s.materials[s.geometry.material[0] as usize];
     assert_eq!((wall.name.as_str(), wall.reflectance), ("wall", 0.5));
@@ -460,9 +460,9 @@ min_hits = 100
             half_angle_deg: 5.0
         }
     );
-    let sim = &s.simulation;
+    let (sim, seed) = (&s.simulation.stop, s.simulation.seed);
     assert_eq!(
-        (sim.photons, sim.seed, sim.time_limit_s, sim.target_error),
+        (sim.photons, seed, sim.time_limit_s, sim.target_error),
         (Some(10), 7, Some(2.5), Some(0.01))
     );
     assert_eq!(

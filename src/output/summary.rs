@@ -251,7 +251,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
             .collect(),
         luminaires: luminaires(scene),
         target: state.target.describe(&scene.receivers),
-        absolute_error: state.options.absolute,
+        absolute_error: state.options.stop.absolute,
         bounce_cap: state.setup.bounce_cap,
         photons_killed_by_bounce_cap: t.killed_by_bounce_cap,
         direct_rays: t.direct_rays,
@@ -285,7 +285,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
         },
         reliability: reliability(state.history, target_vov(state)),
         history: state.history.to_vec(),
-        forecast: match (state.options.target_error, state.forecast) {
+        forecast: match (state.options.stop.target_error, state.forecast) {
             (Some(target_error), Some(f)) => Some(ForecastSummary {
                 target_error,
                 predicted_total_s: f.total_s,

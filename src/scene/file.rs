@@ -142,19 +142,6 @@ pub struct ReceiverFile {
     pub estimator: Option<String>,
 }
 
-#[derive(Deserialize, Debug)]
-#[serde(deny_unknown_fields)]
-pub struct SimulationFile {
-    pub photons: Option<u64>,
-    pub seed: Option<u64>,
-    pub time_limit: Option<f64>,
-    pub target_error: Option<f64>,
-    pub target: Option<String>,
-    #[serde(default)]
-    pub absolute: bool,
-    pub min_hits: Option<u64>,
-}
-
 /// The `[camera]` table: the eye of `luxtally render`.
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]

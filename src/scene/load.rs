@@ -7,7 +7,6 @@
 
 use super::file::{
     self, CameraFile, InstanceFile, LightFile, MaterialFile, ObjectFile, ReceiverFile, ScaleFile,
-    SimulationFile,
 };
 use super::mesh_io;
 use super::shapes::{self, Mesh, Transform};
@@ -15,6 +14,7 @@ use super::{
     Camera, Estimator, Geometry, Light, LightKind, Luminaire, Material, Placement, PrototypeMesh,
     Quantity, Receiver, Scene, Simulation,
 };
+use crate::criteria::{self, StopCriteria};
 use crate::error::{Error, Result};
 use crate::photometry::Photometry;
 use glam::{DAffine3, DMat3, DVec3};
@@ -114,7 +114,7 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
     }
 
     let simulation = match raw.simulation {
-        Some(value) => simulation(file::entry(value, origin, "simulation")?, &at("simulation"))?,
+        Some(value) => simulation(value, origin)?,
         None => Simulation {
             seed: 1,
             ..Simulation::default()
@@ -1021,24 +1021,19 @@ fn camera(c: CameraFile, at: &str) -> Result<Camera> {
     })
 }
 
-fn simulation(s: SimulationFile, at: &str) -> Result<Simulation> {
-    if s.photons == Some(0) {
-        return Err(Error::input(format!("{at}.photons"), "must be ≥ 1"));
-    }
-    let positive = |x: Option<f64>, key: &str| match x {
-        Some(v) if !(v > 0.0) => Err(Error::input(
-            format!("{at}.{key}"),
-            format!("must be > 0, got {v}"),
-        )),
-        _ => Ok(x),
-    };
+/// The `[simulation]` table: the seed, and the stop criteria (one type with the command
+/// line's, checked by its one validation).
+fn simulation(value: toml::Value, origin: &str) -> Result<Simulation> {
+    let at = format!("{origin}: simulation");
+    let mut table: toml::Table = file::entry(value, origin, "simulation")?;
+    let seed = table
+        .remove("seed")
+        .map(|v| file::entry::<u64>(v, origin, "simulation.seed"))
+        .transpose()?;
+    let stop: StopCriteria = file::entry(toml::Value::Table(table), origin, "simulation")?;
+    stop.validate(criteria::scene_key(&at))?;
     Ok(Simulation {
-        photons: s.photons,
-        seed: s.seed.unwrap_or(1),
-        time_limit_s: positive(s.time_limit, "time_limit")?,
-        target_error: positive(s.target_error, "target_error")?,
-        target: s.target,
-        absolute: s.absolute,
-        min_hits: s.min_hits,
+        stop,
+        seed: seed.unwrap_or(1),
     })
 }

@@ -4,6 +4,7 @@
 //! Every other position in `Scene` (lights, receivers) stays in world coordinates (f64);
 //! `Geometry::origin` maps between the two frames: world = origin + local.
 
+use crate::criteria::StopCriteria;
 use crate::photometry::Photometry;
 use glam::{DAffine3, DMat3, DVec3, Vec3};
 use std::path::PathBuf;
@@ -383,16 +384,12 @@ impl Receiver {
     }
 }
 
-/// What to stop on, from the scene's `[simulation]` table (the command line overrides it).
+/// The scene's `[simulation]` table: when to stop (the command line overrides it key
+/// by key) and the seed.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct Simulation {
-    pub photons: Option<u64>,
+    pub stop: StopCriteria,
     pub seed: u64,
-    pub time_limit_s: Option<f64>,
-    pub target_error: Option<f64>,
-    pub target: Option<String>,
-    pub absolute: bool,
-    pub min_hits: Option<u64>,
 }
 
 /// A loaded, validated scene.

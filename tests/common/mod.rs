@@ -15,10 +15,9 @@ pub fn scene(toml: &str) -> Scene {
 
 pub fn options(scene: &Scene, photons: u64, threads: usize, backend: Backend) -> RunOptions {
     RunOptions {
-        photons: Some(photons),
         threads,
         backend,
-        ..RunOptions::from_scene(scene)
+        ..RunOptions::with_photons(scene, photons)
     }
 }
 
