@@ -17,11 +17,14 @@
 //! the payload (u32 LE), then the payload (postcard).
 
 use crate::accel::RayCaster;
-use crate::run::{add_direct, top_up_direct, RunOptions, RunResult, RunSetup, RunState};
+use crate::run::{
+    add_direct, top_up_direct, ChunkRecord, Resumed, RunOptions, RunResult, RunSetup, RunState,
+    ShardRange,
+};
 use crate::scene::Scene;
 use crate::stats::forecast::HistoryPoint;
 use crate::stats::stop::{StopReason, Target};
-use crate::tally::{CellPartial, CellSums, ChunkTally, CompensatedSum, Tallies};
+use crate::tally::{CellSums, ChunkTally, CompensatedSum, Tallies};
 use crate::trace::direct::{DirectSchedule, PILOT_REPLICATES};
 use crate::trace::{Tracer, CHUNK_PHOTONS};
 use crate::{Error, Result};
@@ -39,123 +42,6 @@ pub const FORMAT_VERSION: u32 = 1;
 const HEADER_BYTES: usize = 8 + 4 + 8 + 4;
 /// Seconds between checkpoints unless `--checkpoint-every` says otherwise.
 pub const DEFAULT_PERIOD_S: f64 = 60.0;
-
-/// Shard `index` of `count`: the photons `first_photon .. end_photon`, whole chunks of
-/// the run's chunk sequence.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct ShardRange {
-    pub index: u32,
-    pub count: u32,
-    pub first_photon: u64,
-    pub end_photon: u64,
-}
-
-impl ShardRange {
-    /// Shard `index` (from 0) of `count` over `total` photons: chunks split as evenly as
-    /// whole chunks allow.
-    pub fn new(index: u32, count: u32, total: u64) -> Result<ShardRange> {
-        if count == 0 || index >= count {
-            return Err(Error::input(
-                "--shard",
-                format!("{index}/{count}: expected I/N with 0 ≤ I < N"),
-            ));
-        }
-        let chunks = total.div_ceil(CHUNK_PHOTONS);
-        if chunks < count as u64 {
-            return Err(Error::input(
-                "--shard",
-                format!(
-                    "{count} shards need at least {count} chunks of {CHUNK_PHOTONS} photons; \
-                     --photons is {total}"
-                ),
-            ));
-        }
-        let chunk_of = |i: u64| (chunks as u128 * i as u128 / count as u128) as u64;
-        Ok(ShardRange {
-            index,
-            count,
-            first_photon: (chunk_of(index as u64) * CHUNK_PHOTONS).min(total),
-            end_photon: (chunk_of(index as u64 + 1) * CHUNK_PHOTONS).min(total),
-        })
-    }
-
-    /// `I/N` of the command line.
-    pub fn parse(text: &str, total: u64) -> Result<ShardRange> {
-        let bad = || Error::input("--shard", format!("`{text}`: expected I/N, e.g. 0/4"));
-        let (i, n) = text.split_once('/').ok_or_else(bad)?;
-        let i: u32 = i.trim().parse().map_err(|_| bad())?;
-        let n: u32 = n.trim().parse().map_err(|_| bad())?;
-        ShardRange::new(i, n, total)
-    }
-}
-
-/// One receiver cell's partial of one chunk.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct SavedPartial {
-    pub cell: u32,
-    pub hits: u64,
-    pub moments: [f64; 4],
-}
-
-/// What the merge needs of one chunk of a shard: its photons, photon rays and receiver
-/// partials (the integer counters are added as shard totals).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ChunkRecord {
-    pub photons: u32,
-    pub rays: u64,
-    pub cells: Vec<SavedPartial>,
-}
-
-impl ChunkRecord {
-    pub fn of(chunk: &ChunkTally, photons: u32) -> ChunkRecord {
-        ChunkRecord {
-            photons,
-            rays: chunk.rays,
-            cells: chunk
-                .scores
-                .iter()
-                .map(|p| SavedPartial {
-                    cell: p.cell,
-                    hits: p.hits,
-                    moments: p.moments,
-                })
-                .collect(),
-        }
-    }
-
-    /// The chunk as a tally to fold (no deposits: the triangle map is added as totals).
-    fn to_chunk(&self, chunk: &mut ChunkTally) {
-        chunk.clear();
-        chunk.rays = self.rays;
-        chunk.scores.extend(self.cells.iter().map(|p| CellPartial {
-            cell: p.cell,
-            hits: p.hits,
-            moments: p.moments,
-        }));
-    }
-}
-
-/// A run's state to go on from.
-pub struct Resumed {
-    pub tallies: Tallies,
-    pub history: Vec<HistoryPoint>,
-    pub direct_per_photon: f64,
-    pub elapsed_s: f64,
-    pub stats_s: f64,
-    pub merge_s: f64,
-    pub direct_s: f64,
-    pub chunks: Vec<ChunkRecord>,
-}
-
-/// Where a run starts, which photons it traces and who traces them (see
-/// `run::run_from`).
-#[derive(Default)]
-pub struct Start {
-    pub resumed: Option<Resumed>,
-    pub shard: Option<ShardRange>,
-    /// Other processes sharing the chunks (MPI).
-    pub distributor: Option<Box<dyn crate::distributed::Distributor>>,
-}
 
 /// The options that change the numbers: a checkpoint is only continued, or merged,
 /// with the same ones.
@@ -834,22 +720,6 @@ pub fn merge(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn shards_cover_the_chunks_without_gap_or_overlap() {
-        let total = 10 * CHUNK_PHOTONS + 17;
-        let mut next = 0;
-        for i in 0..3 {
-            let s = ShardRange::new(i, 3, total).unwrap();
-            assert_eq!(s.first_photon, next);
-            assert_eq!(s.first_photon % CHUNK_PHOTONS, 0);
-            next = s.end_photon;
-        }
-        assert_eq!(next, total);
-        assert!(ShardRange::new(3, 3, total).is_err());
-        assert!(ShardRange::new(0, 12, total).is_err());
-        assert!(ShardRange::parse("1/x", total).is_err());
-    }
 
     #[test]
     fn a_damaged_checkpoint_is_refused_in_one_line() {

@@ -4,7 +4,6 @@
 //! process. Everything else (statistics, stop, direct light, outputs, checkpoints)
 //! stays on rank 0.
 
-use crate::checkpoint::SavedPartial;
 use crate::tally::{CellPartial, ChunkTally};
 use serde::{Deserialize, Serialize};
 
@@ -37,7 +36,7 @@ pub enum Order {
 #[derive(Serialize, Deserialize)]
 pub struct WireChunk {
     deposits: Vec<u32>,
-    scores: Vec<SavedPartial>,
+    scores: Vec<CellPartial>,
     rays: u64,
     killed_by_bounce_cap: u64,
     history_hits: [u64; 4],
@@ -47,15 +46,7 @@ impl WireChunk {
     pub fn of(c: &ChunkTally) -> WireChunk {
         WireChunk {
             deposits: c.deposits.clone(),
-            scores: c
-                .scores
-                .iter()
-                .map(|p| SavedPartial {
-                    cell: p.cell,
-                    hits: p.hits,
-                    moments: p.moments,
-                })
-                .collect(),
+            scores: c.scores.clone(),
             rays: c.rays,
             killed_by_bounce_cap: c.killed_by_bounce_cap,
             history_hits: c.history_hits,
@@ -65,11 +56,7 @@ impl WireChunk {
     pub fn into_chunk(self, c: &mut ChunkTally) {
         c.clear();
         c.deposits = self.deposits;
-        c.scores.extend(self.scores.iter().map(|p| CellPartial {
-            cell: p.cell,
-            hits: p.hits,
-            moments: p.moments,
-        }));
+        c.scores = self.scores;
         c.rays = self.rays;
         c.killed_by_bounce_cap = self.killed_by_bounce_cap;
         c.history_hits = self.history_hits;

@@ -11,8 +11,8 @@
 //! The sum is compared with `--max-memory`, else with the memory available now
 //! (`MemAvailable`, capped by a cgroup v2 limit).
 //!
-//! Also here: the checks that keep user numbers from overflowing the engine's index types
-//! (receiver cells are indexed by u32 across all receivers) and its thread count.
+//! [`check_run`] also makes the run's own checks that keep user numbers from overflowing
+//! the engine's index types ([`crate::run::check_indexes`]), before anything is allocated.
 
 use crate::accel::Backend;
 use crate::render::TILE_PIXELS;
@@ -24,10 +24,6 @@ use crate::trace::CHUNK_PHOTONS;
 use crate::{Error, Result};
 use std::mem::size_of;
 use std::path::Path;
-
-/// Most worker threads a run accepts: more would only cost memory (every worker keeps
-/// its own scratch) and, past 65 536, break epoch sizing.
-pub const MAX_THREADS: usize = 1024;
 
 /// Geometry and BVH per triangle with Embree (bytes): the scene's own arrays, Embree's
 /// copy and BVH (build quality medium) and the per-triangle outputs (scene_map.ply,
@@ -273,7 +269,7 @@ pub fn render_estimate(scene: &Scene, camera: &Camera, threads: usize) -> Estima
 
 /// Checks a run of `scene` with `options` (and, for `render`, the eye pass of `camera`
 /// after it, or alone with `photon_pass == false`) against `budget`, and the numbers
-/// the engine indexes ([`validate`]). Call before allocating anything large: building
+/// the engine indexes ([`crate::run::check_indexes`]). Call before allocating anything large: building
 /// the BVH, tallies, the output folder.
 pub fn check_run(
     scene: &Scene,
@@ -282,7 +278,7 @@ pub fn check_run(
     photon_pass: bool,
     budget: &Budget,
 ) -> Result<()> {
-    check_threads(options)?;
+    crate::run::check_threads(options.threads)?;
     let origin = scene.path.display().to_string();
     let mut estimate = geometry_estimate(scene.geometry.triangle_count() as u64, options.backend);
     let run = photon_pass.then(|| photon_pass_estimate(scene, options));
@@ -297,7 +293,7 @@ pub fn check_run(
         .parts
         .extend(larger.into_iter().flat_map(|e| e.parts));
     budget.check(&origin, &estimate)?;
-    validate(scene, options)
+    crate::run::check_indexes(scene, options.threads)
 }
 
 /// Before tessellating: the triangles the scene file's built-in shapes will make (mesh
@@ -324,36 +320,6 @@ pub fn check_scene_file(path: &Path, backend: Backend, budget: &Budget) -> Resul
         })
         .fold(0, u64::saturating_add);
     budget.check(&origin, &geometry_estimate(triangles, backend))
-}
-
-/// The numbers the engine indexes with fixed-width integers: receiver cells (u32 over
-/// all receivers) and worker threads.
-pub fn validate(scene: &Scene, options: &RunOptions) -> Result<()> {
-    let cells: u64 = scene
-        .receivers
-        .iter()
-        .map(|r| r.cells[0] as u64 * r.cells[1] as u64)
-        .fold(0, u64::saturating_add);
-    if cells > u32::MAX as u64 {
-        return Err(Error::input(
-            format!("{}: receivers", scene.path.display()),
-            format!(
-                "{cells} cells in all; at most {} (cells are numbered with 32 bits)",
-                u32::MAX
-            ),
-        ));
-    }
-    check_threads(options)
-}
-
-fn check_threads(options: &RunOptions) -> Result<()> {
-    if options.threads > MAX_THREADS {
-        return Err(Error::input(
-            "--threads",
-            format!("{} is more than {MAX_THREADS}", options.threads),
-        ));
-    }
-    Ok(())
 }
 
 /// Memory available to this process now (bytes): `MemAvailable` of /proc/meminfo,

@@ -4,13 +4,13 @@ mod progress;
 
 use clap::{Parser, Subcommand};
 use luxtally::accel::{self, Backend, RayCaster};
-use luxtally::checkpoint::{Checkpoint, Checkpointer, ShardRange};
+use luxtally::checkpoint::{Checkpoint, Checkpointer};
 use luxtally::criteria::StopCriteria;
 use luxtally::distributed::Distributor;
 use luxtally::limits;
 use luxtally::output::{summary, write_atomic};
 use luxtally::render::{self, IndirectMap, MAP_FILE};
-use luxtally::run::{run_from, Observer, RunOptions, RunResult, RunState, Start};
+use luxtally::run::{run_from, Observer, RunOptions, RunResult, RunState, ShardRange, Start};
 use luxtally::scene::{Estimator, LightKind, Scene};
 use luxtally::{Error, Result};
 use progress::Progress;

@@ -2,7 +2,6 @@
 //! forecast and checked against the stop criteria; everything traced is in the result.
 
 use crate::accel::{self, Backend, RayCaster};
-pub use crate::checkpoint::{ChunkRecord, Resumed, ShardRange, Start};
 use crate::criteria::{self, StopCriteria};
 use crate::distributed::Distributor;
 use crate::scene::{Estimator, Scene};
@@ -16,6 +15,9 @@ use crate::{Error, Result};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
+
+mod start;
+pub use start::{ChunkRecord, Resumed, ShardRange, Start};
 
 thread_local! {
     /// A worker thread's batch buffers: reused by every chunk it traces (their contents
@@ -373,7 +375,7 @@ pub fn run_from(
 /// Checks the options a run needs beyond the scene's own checks; returns the error
 /// target's subject and the photons to stop at.
 fn validate(scene: &Scene, options: &RunOptions) -> Result<(Target, u64)> {
-    crate::limits::validate(scene, options)?;
+    check_indexes(scene, options.threads)?;
     let target = match &options.stop.target {
         Some(t) => Target::parse(t, &scene.receivers)?,
         None if scene.receivers.is_empty() => Target::Global,
@@ -388,6 +390,41 @@ fn validate(scene: &Scene, options: &RunOptions) -> Result<(Target, u64)> {
     options.stop.validate(criteria::flag)?;
     let max_photons = options.stop.max_photons();
     Ok((target, max_photons))
+}
+
+/// Most worker threads a run accepts: more would only cost memory (every worker keeps
+/// its own scratch) and, past 65 536, break epoch sizing.
+pub const MAX_THREADS: usize = 1024;
+
+/// The numbers the engine indexes with fixed-width integers: receiver cells (u32 over
+/// all receivers) and worker threads.
+pub fn check_indexes(scene: &Scene, threads: usize) -> Result<()> {
+    let cells: u64 = scene
+        .receivers
+        .iter()
+        .map(|r| r.cells[0] as u64 * r.cells[1] as u64)
+        .fold(0, u64::saturating_add);
+    if cells > u32::MAX as u64 {
+        return Err(Error::input(
+            format!("{}: receivers", scene.path.display()),
+            format!(
+                "{cells} cells in all; at most {} (cells are numbered with 32 bits)",
+                u32::MAX
+            ),
+        ));
+    }
+    check_threads(threads)
+}
+
+/// At most [`MAX_THREADS`] worker threads.
+pub fn check_threads(threads: usize) -> Result<()> {
+    if threads > MAX_THREADS {
+        return Err(Error::input(
+            "--threads",
+            format!("{threads} is more than {MAX_THREADS}"),
+        ));
+    }
+    Ok(())
 }
 
 /// Traces photons `first .. first + count` in fixed chunks (on this process's threads,

@@ -49,7 +49,8 @@ impl ChunkTally {
 /// One chunk's scores in one receiver cell: the moments Σx, Σx², Σx³, Σx⁴ over the
 /// chunk's histories (each history's scores in the cell summed first, so eqs. 6–8 see
 /// per-history scores) and the crossings or contributions counted.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// Serialised as is by checkpoints (a shard's chunks) and MPI (a worker's chunks).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CellPartial {
     /// Global cell index over all receivers (see [`ReceiverGrid::first_cell`]).
     pub cell: u32,
