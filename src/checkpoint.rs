@@ -17,16 +17,13 @@
 //! the payload (u32 LE), then the payload (postcard).
 
 use crate::accel::RayCaster;
-use crate::run::{
-    add_direct, top_up_direct, ChunkRecord, Resumed, RunOptions, RunResult, RunSetup, RunState,
-    ShardRange,
-};
+use crate::run::{ChunkRecord, Engine, Resumed, RunOptions, RunResult, RunState, ShardRange};
 use crate::scene::Scene;
 use crate::stats::forecast::HistoryPoint;
 use crate::stats::stop::{StopReason, Target};
 use crate::tally::{CellSums, ChunkTally, CompensatedSum, Tallies};
 use crate::trace::direct::{DirectSchedule, PILOT_REPLICATES};
-use crate::trace::{Tracer, CHUNK_PHOTONS};
+use crate::trace::CHUNK_PHOTONS;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::io::Write;
@@ -569,6 +566,90 @@ pub fn merge(
     setup: Instant,
     mut shards: Vec<(PathBuf, Checkpoint)>,
 ) -> Result<RunResult> {
+    check_shards(scene, options, &mut shards)?;
+    let target = Target::chosen(options.stop.target.as_deref(), &scene.receivers)?;
+    let engine = Engine::new(scene, options, caster)?;
+    let mut tallies = engine.tracer.new_tallies();
+    let mut schedule = DirectSchedule { per_photon: 0.0 };
+    let mut direct_s = engine.add_direct(&mut tallies, PILOT_REPLICATES);
+    let run_setup = engine.setup(setup);
+    let start = Instant::now();
+    let mut chunk = ChunkTally::default();
+    let (mut elapsed_s, mut stats_s) = (0.0, 0.0);
+    for (_, c) in &shards {
+        direct_s += fold_shard(&engine, c, &mut chunk, &mut tallies, &mut schedule);
+        elapsed_s += c.times_s[0];
+        stats_s += c.times_s[1];
+    }
+    direct_s += engine.top_up_direct(&mut tallies, &mut schedule);
+    let error = crate::run::target_error(
+        scene,
+        &target,
+        &tallies,
+        run_setup.total_flux_lm,
+        options.stop.absolute,
+    );
+    let history = vec![HistoryPoint {
+        elapsed_s,
+        photons: tallies.photons,
+        rel_error: error,
+        forecast_s: None,
+        forecast_photons: None,
+    }];
+    Ok(RunResult {
+        setup: run_setup,
+        tallies,
+        history,
+        forecast: None,
+        target,
+        stop_reason: StopReason::Photons,
+        // The shards' photon passes added up (machine seconds), plus the merge.
+        elapsed_s: elapsed_s + start.elapsed().as_secs_f64(),
+        stats_s,
+        merge_s: start.elapsed().as_secs_f64(),
+        direct_s,
+        direct_per_photon: schedule.per_photon,
+        shard: None,
+        chunks: Vec::new(),
+    })
+}
+
+/// Folds shard `c` into `tallies`: its integer counters as totals (they add in any
+/// order), its chunks one by one in chunk order, with the direct light topped up at
+/// every schedule point on the way. Returns the direct light's seconds.
+fn fold_shard(
+    engine: &Engine<'_>,
+    c: &Checkpoint,
+    chunk: &mut ChunkTally,
+    tallies: &mut Tallies,
+    schedule: &mut DirectSchedule,
+) -> f64 {
+    let t = &c.tallies;
+    tallies.killed_by_bounce_cap += t.killed_by_bounce_cap;
+    for (a, b) in tallies.history_hits.iter_mut().zip(t.history_hits) {
+        *a += b;
+    }
+    for (a, b) in tallies.triangle_hits.iter_mut().zip(&t.triangle_hits) {
+        *a += b;
+    }
+    let mut direct_s = 0.0;
+    for record in &c.chunks {
+        record.to_chunk(chunk);
+        tallies.accumulate(chunk, record.photons as u64);
+        if tallies.photons.is_power_of_two() && tallies.photons >= CHUNK_PHOTONS {
+            direct_s += engine.top_up_direct(tallies, schedule);
+        }
+    }
+    direct_s
+}
+
+/// Refuses shards that do not make one whole run of `scene` with `options`' numbers
+/// (one line naming the shard at fault); sorts them by index.
+fn check_shards(
+    scene: &Scene,
+    options: &RunOptions,
+    shards: &mut [(PathBuf, Checkpoint)],
+) -> Result<()> {
     let Some((first_path, first)) = shards.first() else {
         return Err(Error::input("merge", "no shard directories given"));
     };
@@ -584,7 +665,7 @@ pub fn merge(
     };
     let goal = first.photons_goal;
     let print = fingerprint(scene);
-    for (path, c) in &shards {
+    for (path, c) in shards.iter() {
         let Some(s) = c.shard else {
             return Err(Error::input(origin(path), "not a shard's checkpoint"));
         };
@@ -647,74 +728,7 @@ pub fn merge(
             format!("{} of {count} shards given", shards.len()),
         ));
     }
-
-    let threads = options.threads.max(1);
-    let pool = crate::run::thread_pool(threads)?;
-    let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
-    let mut tallies = tracer.new_tallies();
-    let direct = tracer.direct_light();
-    let mut schedule = DirectSchedule { per_photon: 0.0 };
-    let mut direct_s = add_direct(&tracer, &direct, &mut tallies, PILOT_REPLICATES, &pool);
-    let run_setup = RunSetup::new(setup, &tracer, threads);
-    let start = Instant::now();
-    let mut chunk = ChunkTally::default();
-    let (mut elapsed_s, mut stats_s) = (0.0, 0.0);
-    for (_, c) in &shards {
-        let t = &c.tallies;
-        // Integers add in any order.
-        tallies.killed_by_bounce_cap += t.killed_by_bounce_cap;
-        for (a, b) in tallies.history_hits.iter_mut().zip(t.history_hits) {
-            *a += b;
-        }
-        for (a, b) in tallies.triangle_hits.iter_mut().zip(&t.triangle_hits) {
-            *a += b;
-        }
-        for record in &c.chunks {
-            record.to_chunk(&mut chunk);
-            tallies.accumulate(&chunk, record.photons as u64);
-            if tallies.photons.is_power_of_two() && tallies.photons >= CHUNK_PHOTONS {
-                direct_s += top_up_direct(&tracer, &direct, &mut tallies, &mut schedule, &pool);
-            }
-        }
-        elapsed_s += c.times_s[0];
-        stats_s += c.times_s[1];
-    }
-    direct_s += top_up_direct(&tracer, &direct, &mut tallies, &mut schedule, &pool);
-    let target = match &options.stop.target {
-        Some(t) => Target::parse(t, &scene.receivers)?,
-        None if scene.receivers.is_empty() => Target::Global,
-        None => Target::Receiver { index: 0 },
-    };
-    let error = crate::run::target_error(
-        scene,
-        &target,
-        &tallies,
-        run_setup.total_flux_lm,
-        options.stop.absolute,
-    );
-    let history = vec![HistoryPoint {
-        elapsed_s,
-        photons: tallies.photons,
-        rel_error: error,
-        forecast_s: None,
-        forecast_photons: None,
-    }];
-    Ok(RunResult {
-        setup: run_setup,
-        tallies,
-        history,
-        forecast: None,
-        target,
-        stop_reason: StopReason::Photons,
-        // The shards' photon passes added up (machine seconds), plus the merge.
-        elapsed_s: elapsed_s + start.elapsed().as_secs_f64(),
-        stats_s,
-        merge_s: start.elapsed().as_secs_f64(),
-        direct_s,
-        direct_per_photon: schedule.per_photon,
-        shard: None,
-        chunks: Vec::new(),
-    })
+    Ok(())
 }
 
 #[cfg(test)]

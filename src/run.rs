@@ -9,7 +9,7 @@ use crate::stats::forecast::{forecast, Forecast, HistoryPoint};
 use crate::stats::stop::{min_hits, receiver_target_error, StopReason, Target};
 use crate::stats::{map_stats, MapKind};
 use crate::tally::{ChunkTally, Tallies};
-use crate::trace::direct::{relative_variances, DirectLight, DirectSchedule, PILOT_REPLICATES};
+use crate::trace::direct::{relative_variances, DirectSchedule, PILOT_REPLICATES};
 use crate::trace::{Scratch, Tracer, CHUNK_PHOTONS};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -210,6 +210,7 @@ pub fn run_with(
 
 /// [`run_with`] from a checkpoint's state (`start.resumed`) and/or over a shard's photon
 /// range only (`start.shard`: no direct light, chunk partials kept for the merge).
+/// Validate, set up, then epochs until a stop criterion is met.
 pub fn run_from(
     scene: &Scene,
     options: &RunOptions,
@@ -220,167 +221,401 @@ pub fn run_from(
     start: Start,
 ) -> Result<RunResult> {
     let (target, max_photons) = validate(scene, options)?;
-    let shard = start.shard;
-    let mut distributor = start.distributor;
-    // Every process's threads share an epoch's chunks.
-    let processes = distributor.as_ref().map_or(1, |d| d.processes());
-    // A shard traces photons first_photon .. first_photon + max_photons.
-    let (first_photon, max_photons) = match shard {
-        Some(s) => (s.first_photon, s.end_photon - s.first_photon),
-        None => (0, max_photons),
-    };
-    let threads = options.threads.max(1);
-    let pool = thread_pool(threads)?;
-    let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
-    let total_flux_lm = tracer.emitters.total_flux_lm;
-    let resumed = start.resumed;
-    let mut tallies = match &resumed {
-        Some(r) => r.tallies.clone(),
-        None => tracer.new_tallies(),
-    };
-    let direct = tracer.direct_light();
-    let mut direct_schedule = DirectSchedule {
-        per_photon: resumed.as_ref().map_or(0.0, |r| r.direct_per_photon),
-    };
-    // Shards leave the direct light to the merge; a resumed run has its pilot already.
-    let pilot = if shard.is_some() { 0 } else { PILOT_REPLICATES };
-    let mut direct_s = add_direct(&tracer, &direct, &mut tallies, pilot, &pool);
-    let run_setup = RunSetup::new(setup, &tracer, threads);
-    let (mut stats_s, mut merge_s) = (0.0, 0.0);
-    let mut history: Vec<HistoryPoint> = Vec::new();
-    let mut latest_forecast = None;
-    let mut chunk_log: Vec<ChunkRecord> = Vec::new();
-    // A resumed run goes on from the saved clock and history.
-    let mut elapsed_before_s = 0.0;
-    if let Some(r) = resumed {
-        direct_s += r.direct_s;
-        (stats_s, merge_s) = (r.stats_s, r.merge_s);
-        history = r.history;
-        chunk_log = r.chunks;
-        elapsed_before_s = r.elapsed_s;
+    let engine = Engine::new(scene, options, caster)?;
+    let mut run = Epochs::set_up(&engine, scene, options, (target, max_photons), start);
+    let run_setup = engine.setup(setup);
+    let clock = Instant::now();
+    loop {
+        let epoch_start = Instant::now();
+        let count = run.trace();
+        let elapsed_s = run.elapsed_before_s + clock.elapsed().as_secs_f64();
+        let reason = run.evaluate(elapsed_s, interrupt);
+        observer.epoch(&run.state(&run_setup, elapsed_s, reason));
+        if let Some(reason) = reason {
+            let elapsed_s = run.elapsed_before_s + clock.elapsed().as_secs_f64();
+            return Ok(run.finish(run_setup, reason, elapsed_s));
+        }
+        run.size_next_epoch(count, epoch_start.elapsed().as_secs_f64(), elapsed_s);
+    }
+}
+
+/// What traces a run (or a merge of shards): its worker threads and the tracer, which
+/// also computes the next-event receivers' direct light.
+pub(crate) struct Engine<'s> {
+    pub(crate) tracer: Tracer<'s>,
+    pub(crate) pool: rayon::ThreadPool,
+    pub(crate) threads: usize,
+}
+
+impl<'s> Engine<'s> {
+    pub(crate) fn new(
+        scene: &'s Scene,
+        options: &RunOptions,
+        caster: &'s dyn RayCaster,
+    ) -> Result<Engine<'s>> {
+        let threads = options.threads.max(1);
+        Ok(Engine {
+            pool: thread_pool(threads)?,
+            tracer: Tracer::new(scene, caster, options.seed, options.estimator),
+            threads,
+        })
     }
 
-    // Chunk tallies are reused from epoch to epoch (in chunk order, so the merge order
-    // never changes); each worker thread keeps its own scratch buffers.
-    let mut buffers: Vec<ChunkTally> = Vec::new();
-    let start = Instant::now();
-    let mut epoch_photons = CHUNK_PHOTONS * (threads * processes) as u64;
-    let stop_reason = loop {
-        // Epochs end at every schedule point, so every run passes through them.
-        let count = epoch_photons
-            .min(max_photons - tallies.photons)
-            .min(next_schedule_point(tallies.photons) - tallies.photons);
-        let epoch_start = Instant::now();
-        let first = first_photon + tallies.photons;
-        let merge_start = trace_epoch(
-            &tracer,
-            &pool,
-            first,
-            count,
-            &mut buffers,
-            distributor.as_deref_mut(),
-            &mut tallies,
-            shard.is_some().then_some(&mut chunk_log),
-        );
-        merge_s += merge_start.elapsed().as_secs_f64();
-        if shard.is_none() {
-            direct_s += top_up_direct(&tracer, &direct, &mut tallies, &mut direct_schedule, &pool);
-        }
-        let elapsed_s = elapsed_before_s + start.elapsed().as_secs_f64();
-        let stats_start = Instant::now();
+    /// What the set-up settled, `setup` being when it began.
+    pub(crate) fn setup(&self, setup: Instant) -> RunSetup {
+        RunSetup::new(setup, &self.tracer, self.threads)
+    }
 
+    /// The direct light after the photons reached `tallies.photons`: at a schedule
+    /// point (`CHUNK_PHOTONS`·2^k) first the replicates the old schedule wants there,
+    /// then the schedule re-estimated; then the replicates it wants. The replicate count
+    /// and every sum the schedule reads are thus functions of the photon count alone,
+    /// whatever the epochs (a resumed run and a merge of shards pass through the same
+    /// states). Returns the seconds it took.
+    pub(crate) fn top_up_direct(
+        &self,
+        tallies: &mut Tallies,
+        schedule: &mut DirectSchedule,
+    ) -> f64 {
+        let mut seconds = 0.0;
+        if tallies.photons.is_power_of_two() && tallies.photons >= CHUNK_PHOTONS {
+            let wanted = schedule.wanted(tallies.photons, tallies.direct_replicates);
+            seconds += self.add_direct(tallies, wanted);
+            *schedule = self.schedule_direct(tallies);
+        }
+        let wanted = schedule.wanted(tallies.photons, tallies.direct_replicates);
+        seconds + self.add_direct(tallies, wanted)
+    }
+
+    /// Tops the next-event receivers' direct light up to `wanted` replicates; returns
+    /// the seconds it took.
+    pub(crate) fn add_direct(&self, tallies: &mut Tallies, wanted: u64) -> f64 {
+        let first = tallies.direct_replicates;
+        if wanted <= first {
+            return 0.0;
+        }
+        let start = Instant::now();
+        let direct = self.tracer.direct_light();
+        for grid in self.tracer.receivers.iter().filter(|g| g.next_event()) {
+            let cells = &mut tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
+            tallies.direct_rays += self
+                .pool
+                .install(|| direct.add_replicates(grid, cells, first, wanted - first));
+        }
+        tallies.direct_replicates = wanted;
+        start.elapsed().as_secs_f64()
+    }
+
+    /// The direct light's replicates per photon, from the tallies at a schedule point.
+    fn schedule_direct(&self, tallies: &Tallies) -> DirectSchedule {
+        let (mut a, mut b) = (0.0, 0.0);
+        for grid in self.tracer.receivers.iter().filter(|g| g.next_event()) {
+            let cells = &tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
+            let (ga, gb) = relative_variances(cells, tallies.photons, tallies.direct_replicates);
+            (a, b) = (a + ga, b + gb);
+        }
+        DirectSchedule::from_variances(
+            a,
+            b,
+            tallies.direct_rays as f64 / tallies.direct_replicates.max(1) as f64,
+            tallies.rays as f64 / tallies.photons.max(1) as f64,
+        )
+    }
+}
+
+/// A run from epoch to epoch: what it has traced and measured so far.
+struct Epochs<'r, 's> {
+    engine: &'r Engine<'s>,
+    scene: &'s Scene,
+    options: &'r RunOptions,
+    target: Target,
+    distributor: Option<Box<dyn Distributor>>,
+    shard: Option<ShardRange>,
+    /// This run traces photons `first_photon .. first_photon + max_photons`.
+    first_photon: u64,
+    max_photons: u64,
+    /// Photons of the next epoch, and the threads of every process sharing it.
+    epoch_photons: u64,
+    workers: usize,
+    tallies: Tallies,
+    schedule: DirectSchedule,
+    history: Vec<HistoryPoint>,
+    forecast: Option<Forecast>,
+    /// A shard's per-chunk partials, for the merge.
+    chunk_log: Vec<ChunkRecord>,
+    /// Chunk tallies reused from epoch to epoch (in chunk order, so the merge order
+    /// never changes).
+    buffers: Vec<ChunkTally>,
+    /// Seconds: traced before this process took the run over (a resumed run), and
+    /// spent on the direct light, statistics and merging.
+    elapsed_before_s: f64,
+    direct_s: f64,
+    stats_s: f64,
+    merge_s: f64,
+}
+
+impl<'r, 's> Epochs<'r, 's> {
+    /// The set-up: the tallies (a resumed run's, or empty) and the direct light's pilot
+    /// (none for a shard, which leaves the direct light to the merge; a resumed run has
+    /// it already).
+    fn set_up(
+        engine: &'r Engine<'s>,
+        scene: &'s Scene,
+        options: &'r RunOptions,
+        (target, max_photons): (Target, u64),
+        start: Start,
+    ) -> Epochs<'r, 's> {
+        let shard = start.shard;
+        let (first_photon, max_photons) = match shard {
+            Some(s) => (s.first_photon, s.end_photon - s.first_photon),
+            None => (0, max_photons),
+        };
+        // Every process's threads share an epoch's chunks.
+        let processes = start.distributor.as_ref().map_or(1, |d| d.processes());
+        let workers = engine.threads * processes;
+        let resumed = start
+            .resumed
+            .unwrap_or_else(|| Resumed::fresh(engine.tracer.new_tallies()));
+        let mut tallies = resumed.tallies;
+        let pilot = if shard.is_some() { 0 } else { PILOT_REPLICATES };
+        let pilot_s = engine.add_direct(&mut tallies, pilot);
+        Epochs {
+            engine,
+            scene,
+            options,
+            target,
+            distributor: start.distributor,
+            shard,
+            first_photon,
+            max_photons,
+            epoch_photons: CHUNK_PHOTONS * workers as u64,
+            workers,
+            tallies,
+            schedule: DirectSchedule {
+                per_photon: resumed.direct_per_photon,
+            },
+            history: resumed.history,
+            forecast: None,
+            chunk_log: resumed.chunks,
+            buffers: Vec::new(),
+            elapsed_before_s: resumed.elapsed_s,
+            direct_s: pilot_s + resumed.direct_s,
+            stats_s: resumed.stats_s,
+            merge_s: resumed.merge_s,
+        }
+    }
+
+    /// Traces the next epoch and folds it in (epochs end at every schedule point, so
+    /// every run passes through them), then tops the direct light up (not for a shard);
+    /// returns the photons traced.
+    fn trace(&mut self) -> u64 {
+        let done = self.tallies.photons;
+        let count = self
+            .epoch_photons
+            .min(self.max_photons - done)
+            .min(next_schedule_point(done) - done);
+        let merge_start = self.trace_chunks(self.first_photon + done, count);
+        self.merge_s += merge_start.elapsed().as_secs_f64();
+        if self.shard.is_none() {
+            self.direct_s += self
+                .engine
+                .top_up_direct(&mut self.tallies, &mut self.schedule);
+        }
+        count
+    }
+
+    /// Traces photons `first .. first + count` in fixed chunks (on this process's
+    /// threads, or shared out by the distributor) and folds them into the tallies in
+    /// chunk order (and, for a shard, their records into the chunk log); returns when
+    /// the merge began.
+    fn trace_chunks(&mut self, first: u64, count: u64) -> Instant {
+        let chunks: Vec<(u64, u32)> = (0..count.div_ceil(CHUNK_PHOTONS))
+            .map(|c| {
+                let start = first + c * CHUNK_PHOTONS;
+                (start, CHUNK_PHOTONS.min(first + count - start) as u32)
+            })
+            .collect();
+        if self.buffers.len() < chunks.len() {
+            self.buffers.resize_with(chunks.len(), ChunkTally::default);
+        }
+        let results = &mut self.buffers[..chunks.len()];
+        let tracer = &self.engine.tracer;
+        let pool = &self.engine.pool;
+        let mut local = |chunks: &[(u64, u32)], results: &mut [ChunkTally]| {
+            pool.install(|| {
+                chunks
+                    .par_iter()
+                    .zip(results.par_iter_mut())
+                    .for_each(|(&(first, n), tally)| {
+                        SCRATCH.with_borrow_mut(|scratch| {
+                            tracer.trace_chunk_into(first, n, scratch, tally)
+                        })
+                    })
+            })
+        };
+        match self.distributor.as_deref_mut() {
+            Some(d) => d.trace(&chunks, results, &mut local),
+            None => local(&chunks, results),
+        }
+        let merge_start = Instant::now();
+        let log = self.shard.is_some();
+        for (chunk, &(_, n)) in results.iter().zip(&chunks) {
+            self.tallies.accumulate(chunk, n as u64);
+            if log {
+                self.chunk_log.push(ChunkRecord::of(chunk, n));
+            }
+        }
+        merge_start
+    }
+
+    /// The statistics after an epoch: the target's error into the history, with the
+    /// forecast when there is an error target; then the stop check.
+    fn evaluate(&mut self, elapsed_s: f64, interrupt: &AtomicBool) -> Option<StopReason> {
+        let stats_start = Instant::now();
+        let scene = self.scene;
+        let stop = &self.options.stop;
         let error = target_error(
             scene,
-            &target,
-            &tallies,
-            total_flux_lm,
-            options.stop.absolute,
+            &self.target,
+            &self.tallies,
+            self.engine.tracer.emitters.total_flux_lm,
+            stop.absolute,
         );
         let mut point = HistoryPoint {
             elapsed_s,
-            photons: tallies.photons,
+            photons: self.tallies.photons,
             rel_error: error,
             forecast_s: None,
             forecast_photons: None,
         };
-        history.push(point);
-        if let Some(goal) = options.stop.target_error {
-            latest_forecast = forecast(&history, goal);
-            point.forecast_s = latest_forecast.map(|f| f.total_s);
-            point.forecast_photons = latest_forecast.map(|f| f.photons);
-            *history.last_mut().expect("pushed above") = point;
+        self.history.push(point);
+        if let Some(goal) = stop.target_error {
+            self.forecast = forecast(&self.history, goal);
+            point.forecast_s = self.forecast.map(|f| f.total_s);
+            point.forecast_photons = self.forecast.map(|f| f.photons);
+            *self.history.last_mut().expect("pushed above") = point;
         }
+        let reason = self.stop_reason(error, elapsed_s, interrupt);
+        self.stats_s += stats_start.elapsed().as_secs_f64();
+        reason
+    }
 
-        let reason = stop_reason(
-            scene,
-            options,
-            &target,
-            &tallies,
-            error,
-            max_photons,
-            elapsed_s,
-            interrupt,
-        );
-        stats_s += stats_start.elapsed().as_secs_f64();
-        observer.epoch(&RunState {
-            scene,
-            options,
-            setup: &run_setup,
-            target: &target,
-            tallies: &tallies,
-            history: &history,
-            forecast: latest_forecast,
-            elapsed_s,
-            stats_s,
-            merge_s,
-            direct_s,
-            stop_reason: reason,
-            resumable: Resumable {
-                direct_per_photon: direct_schedule.per_photon,
-                shard,
-                chunks: &chunk_log,
-            },
-        });
-        if let Some(reason) = reason {
-            break reason;
+    /// The first stop criterion met after an epoch, if any (the target's `error` now).
+    fn stop_reason(
+        &self,
+        error: f64,
+        elapsed_s: f64,
+        interrupt: &AtomicBool,
+    ) -> Option<StopReason> {
+        let stop = &self.options.stop;
+        if stop.target_error.is_some_and(|goal| error <= goal) {
+            Some(StopReason::TargetError)
+        } else if stop
+            .min_hits
+            .is_some_and(|n| self.fewest_hits().is_some_and(|h| h >= n))
+        {
+            Some(StopReason::MinHits)
+        } else if self.tallies.photons >= self.max_photons {
+            Some(StopReason::Photons)
+        } else if stop.time_limit_s.is_some_and(|t| elapsed_s >= t) {
+            Some(StopReason::Time)
+        } else if interrupt.load(Ordering::Relaxed) {
+            Some(StopReason::Interrupted)
+        } else {
+            None
         }
-        let goal_photons = goal_photons(scene, options, &target, &tallies, latest_forecast);
-        epoch_photons = next_epoch_photons(
-            tallies.photons,
+    }
+
+    /// The fewest hits in a cell of the target, if it is a receiver's.
+    fn fewest_hits(&self) -> Option<u64> {
+        let receivers = &self.scene.receivers;
+        let r = self.target.receiver()?;
+        Some(min_hits(
+            &self.target,
+            receivers,
+            self.tallies.receiver_cells(receivers, r),
+        ))
+    }
+
+    /// The photon count at which a stop is predicted: the error forecast's, or the
+    /// projection of `--min-hits` (hits grow in proportion to photons), whichever is
+    /// nearer.
+    fn goal_photons(&self) -> Option<u64> {
+        let hits_goal = self.options.stop.min_hits.and_then(|n| {
+            let fewest = self.fewest_hits()?;
+            (fewest > 0).then(|| (self.tallies.photons as f64 * n as f64 / fewest as f64) as u64)
+        });
+        [self.forecast.map(|f| f.photons), hits_goal]
+            .into_iter()
+            .flatten()
+            .min()
+    }
+
+    /// Sizes the next epoch from the last one's `count` photons in `epoch_s` seconds.
+    fn size_next_epoch(&mut self, count: u64, epoch_s: f64, elapsed_s: f64) {
+        self.epoch_photons = next_epoch_photons(
+            self.tallies.photons,
             count,
-            epoch_start.elapsed().as_secs_f64(),
+            epoch_s,
             elapsed_s,
-            options.stop.time_limit_s,
-            goal_photons,
-            threads * processes,
+            self.options.stop.time_limit_s,
+            self.goal_photons(),
+            self.workers,
         );
-    };
-    Ok(RunResult {
-        setup: run_setup,
-        tallies,
-        history,
-        forecast: latest_forecast,
-        target,
-        stop_reason,
-        elapsed_s: elapsed_before_s + start.elapsed().as_secs_f64(),
-        stats_s,
-        merge_s,
-        direct_s,
-        direct_per_photon: direct_schedule.per_photon,
-        shard,
-        chunks: chunk_log,
-    })
+    }
+
+    /// The state after an epoch, for the observer.
+    fn state<'a>(
+        &'a self,
+        setup: &'a RunSetup,
+        elapsed_s: f64,
+        stop_reason: Option<StopReason>,
+    ) -> RunState<'a> {
+        RunState {
+            scene: self.scene,
+            options: self.options,
+            setup,
+            target: &self.target,
+            tallies: &self.tallies,
+            history: &self.history,
+            forecast: self.forecast,
+            elapsed_s,
+            stats_s: self.stats_s,
+            merge_s: self.merge_s,
+            direct_s: self.direct_s,
+            stop_reason,
+            resumable: Resumable {
+                direct_per_photon: self.schedule.per_photon,
+                shard: self.shard,
+                chunks: &self.chunk_log,
+            },
+        }
+    }
+
+    fn finish(self, setup: RunSetup, stop_reason: StopReason, elapsed_s: f64) -> RunResult {
+        RunResult {
+            setup,
+            tallies: self.tallies,
+            history: self.history,
+            forecast: self.forecast,
+            target: self.target,
+            stop_reason,
+            elapsed_s,
+            stats_s: self.stats_s,
+            merge_s: self.merge_s,
+            direct_s: self.direct_s,
+            direct_per_photon: self.schedule.per_photon,
+            shard: self.shard,
+            chunks: self.chunk_log,
+        }
+    }
 }
 
 /// Checks the options a run needs beyond the scene's own checks; returns the error
 /// target's subject and the photons to stop at.
 fn validate(scene: &Scene, options: &RunOptions) -> Result<(Target, u64)> {
     check_indexes(scene, options.threads)?;
-    let target = match &options.stop.target {
-        Some(t) => Target::parse(t, &scene.receivers)?,
-        None if scene.receivers.is_empty() => Target::Global,
-        None => Target::Receiver { index: 0 },
-    };
+    let target = Target::chosen(options.stop.target.as_deref(), &scene.receivers)?;
     if options.stop.min_hits.is_some() && target == Target::Global {
         return Err(Error::input(
             "--min-hits",
@@ -425,179 +660,6 @@ pub fn check_threads(threads: usize) -> Result<()> {
         ));
     }
     Ok(())
-}
-
-/// Traces photons `first .. first + count` in fixed chunks (on this process's threads,
-/// or shared out by `distributor`) and folds them into `tallies` in chunk order (and
-/// their records into `chunk_log`, for shards); returns when the merge began.
-#[allow(clippy::too_many_arguments)]
-fn trace_epoch(
-    tracer: &Tracer<'_>,
-    pool: &rayon::ThreadPool,
-    first: u64,
-    count: u64,
-    buffers: &mut Vec<ChunkTally>,
-    distributor: Option<&mut (dyn Distributor + '_)>,
-    tallies: &mut Tallies,
-    chunk_log: Option<&mut Vec<ChunkRecord>>,
-) -> Instant {
-    let chunks: Vec<(u64, u32)> = (0..count.div_ceil(CHUNK_PHOTONS))
-        .map(|c| {
-            let start = first + c * CHUNK_PHOTONS;
-            (start, CHUNK_PHOTONS.min(first + count - start) as u32)
-        })
-        .collect();
-    if buffers.len() < chunks.len() {
-        buffers.resize_with(chunks.len(), ChunkTally::default);
-    }
-    let results = &mut buffers[..chunks.len()];
-    let mut local = |chunks: &[(u64, u32)], results: &mut [ChunkTally]| {
-        pool.install(|| {
-            chunks
-                .par_iter()
-                .zip(results.par_iter_mut())
-                .for_each(|(&(first, n), tally)| {
-                    SCRATCH.with_borrow_mut(|scratch| {
-                        tracer.trace_chunk_into(first, n, scratch, tally)
-                    })
-                })
-        })
-    };
-    match distributor {
-        Some(d) => d.trace(&chunks, results, &mut local),
-        None => local(&chunks, results),
-    }
-    let merge_start = Instant::now();
-    let mut chunk_log = chunk_log;
-    for (chunk, &(_, n)) in results.iter().zip(&chunks) {
-        tallies.accumulate(chunk, n as u64);
-        if let Some(log) = chunk_log.as_deref_mut() {
-            log.push(ChunkRecord::of(chunk, n));
-        }
-    }
-    merge_start
-}
-
-/// The first stop criterion met after an epoch, if any (the target's `error` now).
-#[allow(clippy::too_many_arguments)]
-fn stop_reason(
-    scene: &Scene,
-    options: &RunOptions,
-    target: &Target,
-    tallies: &Tallies,
-    error: f64,
-    max_photons: u64,
-    elapsed_s: f64,
-    interrupt: &AtomicBool,
-) -> Option<StopReason> {
-    if options.stop.target_error.is_some_and(|goal| error <= goal) {
-        Some(StopReason::TargetError)
-    } else if options.stop.min_hits.is_some_and(|n| {
-        target.receiver().is_some_and(|r| {
-            min_hits(
-                target,
-                &scene.receivers,
-                tallies.receiver_cells(&scene.receivers, r),
-            ) >= n
-        })
-    }) {
-        Some(StopReason::MinHits)
-    } else if tallies.photons >= max_photons {
-        Some(StopReason::Photons)
-    } else if options.stop.time_limit_s.is_some_and(|t| elapsed_s >= t) {
-        Some(StopReason::Time)
-    } else if interrupt.load(Ordering::Relaxed) {
-        Some(StopReason::Interrupted)
-    } else {
-        None
-    }
-}
-
-/// The photon count at which a stop is predicted: the error forecast's, or the
-/// projection of `--min-hits` (hits grow in proportion to photons), whichever is
-/// nearer.
-fn goal_photons(
-    scene: &Scene,
-    options: &RunOptions,
-    target: &Target,
-    tallies: &Tallies,
-    forecast: Option<Forecast>,
-) -> Option<u64> {
-    let hits_goal = options.stop.min_hits.and_then(|n| {
-        let r = target.receiver()?;
-        let fewest = min_hits(
-            target,
-            &scene.receivers,
-            tallies.receiver_cells(&scene.receivers, r),
-        );
-        (fewest > 0).then(|| (tallies.photons as f64 * n as f64 / fewest as f64) as u64)
-    });
-    [forecast.map(|f| f.photons), hits_goal]
-        .into_iter()
-        .flatten()
-        .min()
-}
-
-/// The direct light after the photons reached `tallies.photons`: at a schedule point
-/// (`CHUNK_PHOTONS`·2^k) first the replicates the old schedule wants there, then the
-/// schedule re-estimated; then the replicates it wants. The replicate count and every
-/// sum the schedule reads are thus functions of the photon count alone, whatever the
-/// epochs (a resumed run and a merge of shards pass through the same states).
-/// Returns the seconds it took.
-pub(crate) fn top_up_direct(
-    tracer: &Tracer<'_>,
-    direct: &DirectLight<'_>,
-    tallies: &mut Tallies,
-    schedule: &mut DirectSchedule,
-    pool: &rayon::ThreadPool,
-) -> f64 {
-    let mut seconds = 0.0;
-    if tallies.photons.is_power_of_two() && tallies.photons >= CHUNK_PHOTONS {
-        let wanted = schedule.wanted(tallies.photons, tallies.direct_replicates);
-        seconds += add_direct(tracer, direct, tallies, wanted, pool);
-        *schedule = schedule_direct(tracer, tallies);
-    }
-    let wanted = schedule.wanted(tallies.photons, tallies.direct_replicates);
-    seconds + add_direct(tracer, direct, tallies, wanted, pool)
-}
-
-/// Tops the next-event receivers' direct light up to `wanted` replicates; returns the
-/// seconds it took.
-pub(crate) fn add_direct(
-    tracer: &Tracer<'_>,
-    direct: &DirectLight<'_>,
-    tallies: &mut Tallies,
-    wanted: u64,
-    pool: &rayon::ThreadPool,
-) -> f64 {
-    let first = tallies.direct_replicates;
-    if wanted <= first {
-        return 0.0;
-    }
-    let start = Instant::now();
-    for grid in tracer.receivers.iter().filter(|g| g.next_event()) {
-        let cells = &mut tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
-        tallies.direct_rays +=
-            pool.install(|| direct.add_replicates(grid, cells, first, wanted - first));
-    }
-    tallies.direct_replicates = wanted;
-    start.elapsed().as_secs_f64()
-}
-
-/// The direct light's replicates per photon, from the tallies at a schedule point.
-fn schedule_direct(tracer: &Tracer<'_>, tallies: &Tallies) -> DirectSchedule {
-    let (mut a, mut b) = (0.0, 0.0);
-    for grid in tracer.receivers.iter().filter(|g| g.next_event()) {
-        let cells = &tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
-        let (ga, gb) = relative_variances(cells, tallies.photons, tallies.direct_replicates);
-        (a, b) = (a + ga, b + gb);
-    }
-    DirectSchedule::from_variances(
-        a,
-        b,
-        tallies.direct_rays as f64 / tallies.direct_replicates.max(1) as f64,
-        tallies.rays as f64 / tallies.photons.max(1) as f64,
-    )
 }
 
 /// The next photon count after `done` at which the direct light's schedule is revised:

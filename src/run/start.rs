@@ -95,6 +95,22 @@ pub struct Resumed {
     pub chunks: Vec<ChunkRecord>,
 }
 
+impl Resumed {
+    /// The state of a run that has traced nothing yet.
+    pub fn fresh(tallies: Tallies) -> Resumed {
+        Resumed {
+            tallies,
+            history: Vec::new(),
+            direct_per_photon: 0.0,
+            elapsed_s: 0.0,
+            stats_s: 0.0,
+            merge_s: 0.0,
+            direct_s: 0.0,
+            chunks: Vec::new(),
+        }
+    }
+}
+
 /// Where a run starts, which photons it traces and who traces them (see
 /// [`run_from`](super::run_from)).
 #[derive(Default)]

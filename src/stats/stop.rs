@@ -22,6 +22,15 @@ pub enum Target {
 }
 
 impl Target {
+    /// `text` parsed, or without it the default: the first receiver, else the scene map.
+    pub fn chosen(text: Option<&str>, receivers: &[Receiver]) -> Result<Target> {
+        match text {
+            Some(t) => Target::parse(t, receivers),
+            None if receivers.is_empty() => Ok(Target::Global),
+            None => Ok(Target::Receiver { index: 0 }),
+        }
+    }
+
     /// Parses `global`, `receiver:NAME` or `receiver:NAME[i0..i1,j0..j1]`.
     pub fn parse(text: &str, receivers: &[Receiver]) -> Result<Target> {
         let bad = |msg: String| Error::input("--target", msg);
