@@ -236,27 +236,7 @@ fn main() -> ExitCode {
             photons,
             threads,
             backend,
-        } => (|| {
-            let scene = if scene.as_os_str() == "procedural" {
-                luxtally::bench::lit_scene(
-                    "procedural",
-                    luxtally::bench::procedural_geometry(1_000_000),
-                )
-            } else {
-                luxtally::scene::load(&scene)?
-            };
-            let spinner = Progress::spinner();
-            let table = luxtally::bench::bench_photons(
-                &scene,
-                photons,
-                threads.unwrap_or_else(all_cores),
-                backend.parse()?,
-                &|what| spinner.message(format!("bench-photons: {what}")),
-            );
-            spinner.clear();
-            print!("{}", table?);
-            Ok(())
-        })(),
+        } => bench_photons_command(&scene, photons, threads, &backend),
         Command::BenchScale {
             mesh,
             photons,
@@ -278,33 +258,13 @@ fn main() -> ExitCode {
             time_limit,
             estimator,
             threads,
-        } => (|| {
-            let scene = luxtally::scene::load(&scene)?;
-            let receiver =
-                match receiver.or_else(|| scene.receivers.first().map(|r| r.name.clone())) {
-                    Some(r) => r,
-                    None => {
-                        return Err(Error::input(
-                            scene.path.display().to_string(),
-                            "the scene has no receiver",
-                        ))
-                    }
-                };
-            let estimator = estimator.as_deref().map(parse_estimator).transpose()?;
-            let spinner = Progress::spinner();
-            let report = luxtally::bench::bench_accuracy(
-                &scene,
-                &receiver,
-                estimator,
-                target_error,
-                time_limit,
-                threads.unwrap_or_else(all_cores),
-                &|what| spinner.message(format!("bench-accuracy: {what}")),
-            );
-            spinner.clear();
-            print!("{}", report?);
-            Ok(())
-        })(),
+        } => bench_accuracy_command(
+            &scene,
+            receiver,
+            (target_error, time_limit),
+            estimator.as_deref(),
+            threads,
+        ),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -1064,6 +1024,69 @@ fn bench_scale_command(
         }
     }
     print!("{}", luxtally::bench::scale_table(&results, threads));
+    Ok(())
+}
+
+/// `bench-photons`: photon throughput on a scene file, or on `procedural` geometry.
+fn bench_photons_command(
+    scene: &Path,
+    photons: u64,
+    threads: Option<usize>,
+    backend: &str,
+) -> Result<()> {
+    let scene = if scene.as_os_str() == "procedural" {
+        luxtally::bench::lit_scene(
+            "procedural",
+            luxtally::bench::procedural_geometry(1_000_000),
+        )
+    } else {
+        luxtally::scene::load(scene)?
+    };
+    let spinner = Progress::spinner();
+    let table = luxtally::bench::bench_photons(
+        &scene,
+        photons,
+        threads.unwrap_or_else(all_cores),
+        backend.parse()?,
+        &|what| spinner.message(format!("bench-photons: {what}")),
+    );
+    spinner.clear();
+    print!("{}", table?);
+    Ok(())
+}
+
+/// `bench-accuracy`: time to `target_error` (or `time_limit` seconds) on a receiver,
+/// the scene's first unless named.
+fn bench_accuracy_command(
+    scene: &Path,
+    receiver: Option<String>,
+    (target_error, time_limit): (f64, f64),
+    estimator: Option<&str>,
+    threads: Option<usize>,
+) -> Result<()> {
+    let scene = luxtally::scene::load(scene)?;
+    let receiver = match receiver.or_else(|| scene.receivers.first().map(|r| r.name.clone())) {
+        Some(r) => r,
+        None => {
+            return Err(Error::input(
+                scene.path.display().to_string(),
+                "the scene has no receiver",
+            ))
+        }
+    };
+    let estimator = estimator.map(parse_estimator).transpose()?;
+    let spinner = Progress::spinner();
+    let report = luxtally::bench::bench_accuracy(
+        &scene,
+        &receiver,
+        estimator,
+        target_error,
+        time_limit,
+        threads.unwrap_or_else(all_cores),
+        &|what| spinner.message(format!("bench-accuracy: {what}")),
+    );
+    spinner.clear();
+    print!("{}", report?);
     Ok(())
 }
 

@@ -120,6 +120,22 @@ struct Path {
     lights_counted: bool,
 }
 
+/// Where an eye path meets a surface, as the eye sees it.
+struct Vertex<'a> {
+    p: Vec3,
+    /// The ray's unit direction, the geometric normal and the normal on the eye's side.
+    dir: DVec3,
+    n: DVec3,
+    facing: DVec3,
+    /// The eye sees the triangle's back.
+    back: bool,
+    m: &'a Material,
+    bsdf: &'a Bsdf,
+    path: Path,
+    /// The random stream of (tile, depth, ray) for what is sampled here.
+    stream: u64,
+}
+
 /// Reused buffers of one worker.
 #[derive(Default)]
 pub struct Scratch {
@@ -256,11 +272,7 @@ impl<'a> EyePass<'a> {
         s: &mut Scratch,
         sample_l: &mut [f64],
     ) {
-        let Path {
-            sample,
-            weight,
-            lights_counted,
-        } = s.paths[k];
+        let path = s.paths[k];
         let o = DVec3::new(
             s.rays.ox[k] as f64,
             s.rays.oy[k] as f64,
@@ -273,58 +285,77 @@ impl<'a> EyePass<'a> {
         )
         .normalize();
         let t_hit = s.hits.t[k] as f64;
-        if !lights_counted {
-            sample_l[sample as usize] += weight * self.area_light_seen(o, dir, t_hit);
+        let l = &mut sample_l[path.sample as usize];
+        if !path.lights_counted {
+            *l += path.weight * self.area_light_seen(o, dir, t_hit);
         }
         let Some(surface) = s.hits.surface(k, &self.scene.geometry) else {
             return;
         };
-        let m: &Material = &self.scene.materials[surface.material as usize];
-        let bsdf = &self.bsdfs[surface.material as usize];
-        let (glossy_r, glossy_t) = bsdf.glossy();
-        let glossy = glossy_r + glossy_t > 0.0;
         let n = surface.normal.as_dvec3();
         let back = dir.dot(n) > 0.0;
-        // Normal on the eye's side.
-        let facing = if back { -n } else { n };
-        let (u, v) = (s.hits.u[k], s.hits.v[k]);
-        let p = surface.point;
+        let at = Vertex {
+            p: surface.point,
+            dir,
+            n,
+            // Normal on the eye's side.
+            facing: if back { -n } else { n },
+            back,
+            m: &self.scene.materials[surface.material as usize],
+            bsdf: &self.bsdfs[surface.material as usize],
+            path,
+            stream,
+        };
+        let (glossy_r, glossy_t) = at.bsdf.glossy();
+        let diffuse = at.m.reflectance > 0.0 || at.m.transmittance > 0.0;
+        let glossy = glossy_r + glossy_t > 0.0;
+        if let Some(t) = surface.mapped {
+            let uv = (s.hits.u[k], s.hits.v[k]);
+            self.add_map_light(&at, t as usize, uv, may_continue, l);
+        }
+        if diffuse || glossy {
+            self.queue_direct(&at, s);
+        }
+        if may_continue {
+            self.continue_path(&at, s);
+        }
+    }
 
+    /// Adds the indirect light read from the map at triangle `t` (unmapped, instanced
+    /// objects have none: direct light only): the Lambertian parts', and at the depth
+    /// limit the glossy lobes' as if they were Lambertian of the same weights (the
+    /// rough dielectric split by Fresnel at the viewing angle).
+    fn add_map_light(
+        &self,
+        at: &Vertex,
+        t: usize,
+        (u, v): (f32, f32),
+        may_continue: bool,
+        l: &mut f64,
+    ) {
+        let (m, weight) = (at.m, at.path.weight);
+        let e_seen = || self.field.illuminance_lx(t, at.back, u, v);
+        let e_other = || self.field.illuminance_lx(t, !at.back, u, v);
         if m.reflectance > 0.0 || m.transmittance > 0.0 {
-            // Unmapped (instanced) objects have no indirect map: direct light only.
-            let (e_seen, e_other) = match surface.mapped {
-                Some(t) => (
-                    self.field.illuminance_lx(t as usize, back, u, v),
-                    self.field.illuminance_lx(t as usize, !back, u, v),
-                ),
-                None => (0.0, 0.0),
-            };
-            sample_l[sample as usize] +=
-                weight * (m.reflectance * e_seen + m.transmittance * e_other) / PI;
+            *l += weight * (m.reflectance * e_seen() + m.transmittance * e_other()) / PI;
         }
-        if let (true, false, Some(t)) = (glossy, may_continue, surface.mapped) {
-            // The depth limit: the glossy lobes' indirect light is read from the map as
-            // if they were Lambertian of the same weights (the rough dielectric split by
-            // Fresnel at the viewing angle); unmapped objects have none.
-            let t = t as usize;
-            let e_seen = self.field.illuminance_lx(t, back, u, v);
-            let e_other = self.field.illuminance_lx(t, !back, u, v);
-            let cos_o = -dir.dot(n);
-            let r = fr_dielectric(cos_o, bsdf.ior());
-            sample_l[sample as usize] +=
-                weight * (glossy_r * e_seen + glossy_t * (r * e_seen + (1.0 - r) * e_other)) / PI;
+        let (glossy_r, glossy_t) = at.bsdf.glossy();
+        if glossy_r + glossy_t > 0.0 && !may_continue {
+            let (e_seen, e_other) = (e_seen(), e_other());
+            let r = fr_dielectric(-at.dir.dot(at.n), at.bsdf.ior());
+            *l += weight * (glossy_r * e_seen + glossy_t * (r * e_seen + (1.0 - r) * e_other)) / PI;
         }
-        if m.reflectance > 0.0 || m.transmittance > 0.0 || glossy {
-            self.queue_direct(p, n, facing, -dir, m, bsdf, (weight, sample, stream), s);
-        }
-        if !may_continue {
-            return;
-        }
+    }
+
+    /// Queues the rays that go on from `at`: mirror reflection, Fresnel glass's
+    /// reflection and refraction, and one sampled direction per glossy lobe.
+    fn continue_path(&self, at: &Vertex, s: &mut Scratch) {
+        let (m, bsdf, weight, dir, facing) = (at.m, at.bsdf, at.path.weight, at.dir, at.facing);
         let push_path = |s: &mut Scratch, d: DVec3, w: f64, leave: DVec3, counted: bool| {
             if w < MIN_WEIGHT {
                 return;
             }
-            let origin = offset_origin(p, leave.as_vec3(), self.scene_scale);
+            let origin = offset_origin(at.p, leave.as_vec3(), self.scene_scale);
             s.next_rays.push(
                 origin.to_array(),
                 d.as_vec3().to_array(),
@@ -332,7 +363,7 @@ impl<'a> EyePass<'a> {
                 f32::INFINITY,
             );
             s.next_paths.push(Path {
-                sample,
+                sample: at.path.sample,
                 weight: w,
                 lights_counted: counted,
             });
@@ -349,7 +380,7 @@ impl<'a> EyePass<'a> {
         }
         if m.specular_transmittance > 0.0 {
             // The dielectric's outside is the side the normal points to.
-            let eta = if back { m.ior } else { 1.0 / m.ior };
+            let eta = if at.back { m.ior } else { 1.0 / m.ior };
             let w = weight * m.specular_transmittance;
             match refract(dir, facing, eta) {
                 Some((refracted, fresnel)) => {
@@ -359,20 +390,21 @@ impl<'a> EyePass<'a> {
                 None => push(s, reflect(dir, facing), w, facing),
             }
         }
-        if glossy {
+        let (glossy_r, glossy_t) = bsdf.glossy();
+        if glossy_r + glossy_t > 0.0 {
             // One sampled direction per glossy lobe, weight f·|cos|/pdf, from a stream of
             // (tile, depth, ray) like the area-source pattern.
-            let mut rng = photon_stream(self.seed ^ 0x5a5a_0000_5a5a_0000, stream);
+            let mut rng = photon_stream(self.seed ^ 0x5a5a_0000_5a5a_0000, at.stream);
             let wo = -dir;
             if glossy_r > 0.0 {
                 let u = [uniform(&mut rng), uniform(&mut rng)];
-                if let Some(smp) = bsdf.sample_glossy_reflection(wo, n, u) {
+                if let Some(smp) = bsdf.sample_glossy_reflection(wo, at.n, u) {
                     push_path(s, smp.dir, weight * glossy_r * smp.weight, facing, true);
                 }
             }
             if glossy_t > 0.0 {
                 let u = [uniform(&mut rng), uniform(&mut rng), uniform(&mut rng)];
-                if let Some(smp) = bsdf.sample_rough_dielectric(wo, n, u) {
+                if let Some(smp) = bsdf.sample_rough_dielectric(wo, at.n, u) {
                     let leave = if smp.transmitted { -facing } else { facing };
                     push_path(s, smp.dir, weight * glossy_t * smp.weight, leave, true);
                 }
@@ -380,22 +412,12 @@ impl<'a> EyePass<'a> {
         }
     }
 
-    /// Queues the shadow rays of the direct term at `p` (eqs. 1–2): each carries the
+    /// Queues the shadow rays of the direct term at `at` (eqs. 1–2): each carries the
     /// luminance it adds, ρ/π·E on the eye's side or τ/π·E from the other side, plus
-    /// the glossy lobes' f(wo, ω_light)·E (`normal` the geometric normal, `wo` towards
-    /// the eye).
-    #[allow(clippy::too_many_arguments)]
-    fn queue_direct(
-        &self,
-        p: Vec3,
-        normal: DVec3,
-        facing: DVec3,
-        wo: DVec3,
-        m: &Material,
-        bsdf: &Bsdf,
-        (weight, sample, stream): (f64, u32, u64),
-        s: &mut Scratch,
-    ) {
+    /// the glossy lobes' f(wo, ω_light)·E (`wo` towards the eye).
+    fn queue_direct(&self, at: &Vertex, s: &mut Scratch) {
+        let (p, normal, facing, wo, m, bsdf) = (at.p, at.n, at.facing, -at.dir, at.m, at.bsdf);
+        let (weight, sample, stream) = (at.path.weight, at.path.sample, at.stream);
         let pd = p.as_dvec3();
         let (glossy_r, glossy_t) = bsdf.glossy();
         let glossy = glossy_r + glossy_t > 0.0;
