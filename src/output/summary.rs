@@ -172,62 +172,21 @@ pub struct ForecastSummary {
 pub fn build(state: &RunState<'_>) -> Summary {
     let scene = state.scene;
     let t = state.tallies;
-    let mut receivers = BTreeMap::new();
-    for (index, (r, &estimator)) in scene
+    let receivers = scene
         .receivers
         .iter()
         .zip(&state.setup.estimators)
         .enumerate()
-    {
-        let next_event = estimator == Estimator::NextEvent;
-        let cells = t.receiver_cells(&scene.receivers, index);
-        let stats = receiver_stats(cells, t.counts());
-        let direct: Vec<(f64, f64)> = cells
-            .iter()
-            .map(|c| {
-                let (sum, sum_sq) = c.direct_sums();
-                if t.direct_replicates == 0 {
-                    (0.0, 0.0)
-                } else {
-                    cell_estimate(sum, sum_sq, t.direct_replicates)
-                }
-            })
-            .collect();
-        let max_vov = cells
-            .iter()
-            .filter(|c| c.hits > 0)
-            .map(|c| cell_vov(c, t.counts()))
-            .fold(0.0, f64::max);
-        let (quantity, unit) = match r.quantity {
-            Quantity::Illuminance => ("illuminance", "lx"),
-            Quantity::Luminance { .. } => ("luminance", "cd/m2"),
-        };
-        receivers.insert(
-            r.name.clone(),
-            ReceiverSummary {
-                quantity: quantity.into(),
-                unit: unit.into(),
-                estimator: estimator.name().into(),
-                direct_estimator: if next_event { "sampled" } else { "track" }.into(),
-                indirect_estimator: if next_event { "next_event" } else { "track" }.into(),
-                direct: direct.iter().map(|d| d.0).collect(),
-                direct_sigma: direct.iter().map(|d| d.1).collect(),
-                cells: r.cells,
-                values: stats.values,
-                sigma: stats.sigma,
-                hits: stats.hits,
-                mean: stats.mean,
-                rel_error: stats.rel_error,
-                rel_error_known_cells: stats.rel_error_known,
-                unknown_cells: stats.unknown_cells,
-                fom: figure_of_merit(stats.rel_error.quadratic, state.elapsed_s),
-                max_vov,
-            },
-        );
-    }
-    let g = &scene.geometry;
-    let total = map_stats(t, MapKind::Total, &g.area_m2, state.setup.total_flux_lm);
-    let indirect = map_stats(t, MapKind::Indirect, &g.area_m2, state.setup.total_flux_lm);
+        .map(|(index, (r, &estimator))| (r.name.clone(), receiver(state, index, estimator)))
+        .collect();
+    // A share of the run's time; 0 before any time has passed.
+    let share = |part_s: f64| {
+        if state.elapsed_s > 0.0 {
+            part_s / state.elapsed_s
+        } else {
+            0.0
+        }
+    };
     Summary {
         scene: scene.name.clone(),
         backend: state.options.backend.name().to_string(),
@@ -258,31 +217,10 @@ pub fn build(state: &RunState<'_>) -> Summary {
         direct_s: state.direct_s,
         stats_s: state.stats_s,
         merge_s: state.merge_s,
-        merge_share: if state.elapsed_s > 0.0 {
-            state.merge_s / state.elapsed_s
-        } else {
-            0.0
-        },
-        stats_share: if state.elapsed_s > 0.0 {
-            state.stats_s / state.elapsed_s
-        } else {
-            0.0
-        },
+        merge_share: share(state.merge_s),
+        stats_share: share(state.stats_s),
         receivers,
-        global: GlobalSummary {
-            triangles: g.triangle_count(),
-            area_m2: g.total_area_m2(),
-            mean_illuminance_lx: total.mean_lx,
-            mean_sigma_lx: mean_illuminance_sigma_lx(
-                t,
-                g.total_area_m2(),
-                state.setup.total_flux_lm,
-            ),
-            sigma_lx: total.sigma_lx,
-            rel_error: total.rel_error,
-            indirect_mean_illuminance_lx: indirect.mean_lx,
-            indirect_rel_error: indirect.rel_error,
-        },
+        global: global(state),
         reliability: reliability(state.history, target_vov(state)),
         history: state.history.to_vec(),
         forecast: match (state.options.stop.target_error, state.forecast) {
@@ -293,6 +231,72 @@ pub fn build(state: &RunState<'_>) -> Summary {
             }),
             _ => None,
         },
+    }
+}
+
+/// Receiver `index`'s summary, scored by `estimator`.
+fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> ReceiverSummary {
+    let t = state.tallies;
+    let r = &state.scene.receivers[index];
+    let next_event = estimator == Estimator::NextEvent;
+    let cells = t.receiver_cells(&state.scene.receivers, index);
+    let stats = receiver_stats(cells, t.counts());
+    let direct: Vec<(f64, f64)> = cells
+        .iter()
+        .map(|c| {
+            let (sum, sum_sq) = c.direct_sums();
+            if t.direct_replicates == 0 {
+                (0.0, 0.0)
+            } else {
+                cell_estimate(sum, sum_sq, t.direct_replicates)
+            }
+        })
+        .collect();
+    let max_vov = cells
+        .iter()
+        .filter(|c| c.hits > 0)
+        .map(|c| cell_vov(c, t.counts()))
+        .fold(0.0, f64::max);
+    let (quantity, unit) = match r.quantity {
+        Quantity::Illuminance => ("illuminance", "lx"),
+        Quantity::Luminance { .. } => ("luminance", "cd/m2"),
+    };
+    ReceiverSummary {
+        quantity: quantity.into(),
+        unit: unit.into(),
+        estimator: estimator.name().into(),
+        direct_estimator: if next_event { "sampled" } else { "track" }.into(),
+        indirect_estimator: if next_event { "next_event" } else { "track" }.into(),
+        direct: direct.iter().map(|d| d.0).collect(),
+        direct_sigma: direct.iter().map(|d| d.1).collect(),
+        cells: r.cells,
+        values: stats.values,
+        sigma: stats.sigma,
+        hits: stats.hits,
+        mean: stats.mean,
+        rel_error: stats.rel_error,
+        rel_error_known_cells: stats.rel_error_known,
+        unknown_cells: stats.unknown_cells,
+        fom: figure_of_merit(stats.rel_error.quadratic, state.elapsed_s),
+        max_vov,
+    }
+}
+
+/// The scene map's summary: total and indirect illuminance over every triangle.
+fn global(state: &RunState<'_>) -> GlobalSummary {
+    let (t, g) = (state.tallies, &state.scene.geometry);
+    let flux_lm = state.setup.total_flux_lm;
+    let total = map_stats(t, MapKind::Total, &g.area_m2, flux_lm);
+    let indirect = map_stats(t, MapKind::Indirect, &g.area_m2, flux_lm);
+    GlobalSummary {
+        triangles: g.triangle_count(),
+        area_m2: g.total_area_m2(),
+        mean_illuminance_lx: total.mean_lx,
+        mean_sigma_lx: mean_illuminance_sigma_lx(t, g.total_area_m2(), flux_lm),
+        sigma_lx: total.sigma_lx,
+        rel_error: total.rel_error,
+        indirect_mean_illuminance_lx: indirect.mean_lx,
+        indirect_rel_error: indirect.rel_error,
     }
 }
 

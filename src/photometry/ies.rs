@@ -100,111 +100,208 @@ pub(crate) fn parse(text: &str, origin: &str, dir: &Path) -> Result<Photometry> 
     let keywords = keywords(&lines[label_start.min(tilt_index)..tilt_index], year);
     let spec = tilt_spec(lines[tilt_index]).unwrap_or_default();
     let mut t = Tokens::new(origin, &lines[tilt_index + 1..], tilt_index + 2);
+    let tilt = tilt(spec, &mut t, dir, tilt_index + 1)?;
+    let r = Records::read(&mut t, year)?;
+    let (nv, nh) = (r.vertical_angles, r.horizontal_angles);
+    let (vertical, v_lines) = t.numbers(nv, "vertical angle")?;
+    let (horizontal, h_lines) = t.numbers(nh, "horizontal angle")?;
+    let (mut rows, table_line) = candela_rows(&mut t, &vertical, &horizontal)?;
+    t.finish(&format!("({nv} vertical × {nh} horizontal angles)"))?;
 
-    let tilt = if spec.eq_ignore_ascii_case("NONE") {
-        None
+    check_increasing(origin, &vertical, &v_lines, "vertical angle")?;
+    check_increasing(origin, &horizontal, &h_lines, "horizontal angle")?;
+    let tilt_factor = tilt.as_ref().map_or(1.0, |t| t.factor(0.0));
+    let lamp_output_factor = r.ballast * r.lamp_factor * tilt_factor;
+    let scale = r.multiplier * lamp_output_factor;
+    for row in &mut rows {
+        for v in row.iter_mut() {
+            *v *= scale;
+        }
+    }
+    let angles = Angles {
+        vertical,
+        v_lines,
+        horizontal,
+        h_lines,
+    };
+    let (symmetry, grid) = grid(origin, r.kind, angles, rows)?;
+
+    Photometry::build(Parts {
+        file: origin.to_string(),
+        format: Format::Ies(year.unwrap_or(1986)),
+        photometric_type: r.kind,
+        symmetry,
+        grid,
+        table_line,
+        opening: opening(r.width * r.unit_m, r.length * r.unit_m),
+        height_m: r.height.abs() * r.unit_m,
+        lamp_flux_lm: (r.lumens > 0.0).then_some(r.lamps as f64 * r.lumens),
+        lamp_output_factor,
+        input_watts: Some(r.watts),
+        stated_light_output_ratio: None,
+        stated_downward_fraction: None,
+        tilt,
+        keywords,
+        lamp_sets: Vec::new(),
+    })
+}
+
+/// The tilt table `TILT=<spec>` (line `line`) names: none, the one that follows in
+/// `t`, or a file in `dir`.
+fn tilt(spec: &str, t: &mut Tokens, dir: &Path, line: usize) -> Result<Option<Tilt>> {
+    let origin = t.origin();
+    if spec.eq_ignore_ascii_case("NONE") {
+        Ok(None)
     } else if spec.eq_ignore_ascii_case("INCLUDE") {
-        Some(read_tilt(&mut t)?)
+        Ok(Some(read_tilt(t)?))
     } else if spec.is_empty() {
-        return Err(at(
+        Err(at(
             origin,
-            tilt_index + 1,
+            line,
             "`TILT=` names neither NONE, INCLUDE nor a file",
-        ));
+        ))
     } else {
         let path = dir.join(spec);
         let tilt_text =
-            text::read(&path).map_err(|e| at(origin, tilt_index + 1, format!("TILT file: {e}")))?;
+            text::read(&path).map_err(|e| at(origin, line, format!("TILT file: {e}")))?;
         let tilt_origin = path.display().to_string();
         let tilt_lines = text::lines(&tilt_text);
         let mut tt = Tokens::new(&tilt_origin, &tilt_lines, 1);
         let tilt = read_tilt(&mut tt)?;
         tt.finish("of the tilt table")?;
-        Some(tilt)
-    };
+        Ok(Some(tilt))
+    }
+}
 
-    // Record 1: ten values.
-    let (lamps, _) = t.integer("the number of lamps", 1, 1_000_000)?;
-    let (lumens, lumens_line) = t.number("the lumens per lamp")?;
-    if !(lumens > 0.0 || lumens == -1.0) {
-        return Err(at(
-            origin,
-            lumens_line,
-            format!("lumens per lamp {lumens}: must be positive, or −1 for absolute photometry"),
-        ));
-    }
-    let (multiplier, multiplier_line) = t.number("the candela multiplier")?;
-    positive(origin, multiplier_line, "candela multiplier", multiplier)?;
-    let (nv, _) = t.integer("the number of vertical angles", 2, MAX_ANGLES as i64)?;
-    let (nh, nh_line) = t.integer("the number of horizontal angles", 1, MAX_ANGLES as i64)?;
-    let (nv, nh) = (nv as usize, nh as usize);
-    if nv * nh > MAX_VALUES {
-        return Err(at(
-            origin,
-            nh_line,
-            format!("{nv} × {nh} candela values: more than {MAX_VALUES}"),
-        ));
-    }
-    let (kind, kind_line) = t.number("the photometric type")?;
-    let kind = match kind {
-        1.0 => PhotometricType::C,
-        2.0 => PhotometricType::B,
-        3.0 => PhotometricType::A,
-        _ => {
+/// Records 1 (ten values) and 2 (three values) of an LM-63 file, checked.
+struct Records {
+    lamps: i64,
+    /// Lumens per lamp; −1 for absolute photometry.
+    lumens: f64,
+    multiplier: f64,
+    vertical_angles: usize,
+    horizontal_angles: usize,
+    kind: PhotometricType,
+    /// Metres per unit of the dimensions.
+    unit_m: f64,
+    width: f64,
+    length: f64,
+    height: f64,
+    ballast: f64,
+    lamp_factor: f64,
+    watts: f64,
+}
+
+impl Records {
+    fn read(t: &mut Tokens, year: Option<u16>) -> Result<Records> {
+        let origin = t.origin();
+        let (lamps, _) = t.integer("the number of lamps", 1, 1_000_000)?;
+        let (lumens, lumens_line) = t.number("the lumens per lamp")?;
+        if !(lumens > 0.0 || lumens == -1.0) {
             return Err(at(
                 origin,
-                kind_line,
-                format!("unknown photometric type {kind} (1 = C, 2 = B, 3 = A)"),
-            ))
+                lumens_line,
+                format!(
+                    "lumens per lamp {lumens}: must be positive, or −1 for absolute photometry"
+                ),
+            ));
         }
-    };
-    let (units, units_line) = t.number("the units type")?;
-    let unit_m = match units {
-        1.0 => FOOT_M,
-        2.0 => 1.0,
-        _ => {
+        let (multiplier, multiplier_line) = t.number("the candela multiplier")?;
+        positive(origin, multiplier_line, "candela multiplier", multiplier)?;
+        let (nv, _) = t.integer("the number of vertical angles", 2, MAX_ANGLES as i64)?;
+        let (nh, nh_line) = t.integer("the number of horizontal angles", 1, MAX_ANGLES as i64)?;
+        let (nv, nh) = (nv as usize, nh as usize);
+        if nv * nh > MAX_VALUES {
             return Err(at(
                 origin,
-                units_line,
-                format!("unknown units type {units} (1 = feet, 2 = metres)"),
-            ))
+                nh_line,
+                format!("{nv} × {nh} candela values: more than {MAX_VALUES}"),
+            ));
         }
-    };
-    let (width, _) = t.number("the luminous width")?;
-    let (length, _) = t.number("the luminous length")?;
-    let (height, _) = t.number("the luminous height")?;
+        let (kind, kind_line) = t.number("the photometric type")?;
+        let kind = match kind {
+            1.0 => PhotometricType::C,
+            2.0 => PhotometricType::B,
+            3.0 => PhotometricType::A,
+            _ => {
+                return Err(at(
+                    origin,
+                    kind_line,
+                    format!("unknown photometric type {kind} (1 = C, 2 = B, 3 = A)"),
+                ))
+            }
+        };
+        let (units, units_line) = t.number("the units type")?;
+        let unit_m = match units {
+            1.0 => FOOT_M,
+            2.0 => 1.0,
+            _ => {
+                return Err(at(
+                    origin,
+                    units_line,
+                    format!("unknown units type {units} (1 = feet, 2 = metres)"),
+                ))
+            }
+        };
+        let (width, _) = t.number("the luminous width")?;
+        let (length, _) = t.number("the luminous length")?;
+        let (height, _) = t.number("the luminous height")?;
 
-    // Record 2: three values.
-    let (ballast, ballast_line) = t.number("the ballast factor")?;
-    positive(origin, ballast_line, "ballast factor", ballast)?;
-    let (third, third_line) = t.number(if year == Some(2019) {
-        "the file generation type"
-    } else {
-        "the ballast-lamp photometric factor"
-    })?;
-    // LM-63-2019 reuses the field for how the file was made: not a factor.
-    let lamp_factor = if year == Some(2019) {
-        1.0
-    } else {
-        positive(origin, third_line, "ballast-lamp photometric factor", third)?;
-        third
-    };
-    let (watts, watts_line) = t.number("the input watts")?;
-    if watts < 0.0 {
-        return Err(at(
-            origin,
-            watts_line,
-            format!("input watts {watts} is negative"),
-        ));
+        let (ballast, ballast_line) = t.number("the ballast factor")?;
+        positive(origin, ballast_line, "ballast factor", ballast)?;
+        let (third, third_line) = t.number(if year == Some(2019) {
+            "the file generation type"
+        } else {
+            "the ballast-lamp photometric factor"
+        })?;
+        // LM-63-2019 reuses the field for how the file was made: not a factor.
+        let lamp_factor = if year == Some(2019) {
+            1.0
+        } else {
+            positive(origin, third_line, "ballast-lamp photometric factor", third)?;
+            third
+        };
+        let (watts, watts_line) = t.number("the input watts")?;
+        if watts < 0.0 {
+            return Err(at(
+                origin,
+                watts_line,
+                format!("input watts {watts} is negative"),
+            ));
+        }
+        Ok(Records {
+            lamps,
+            lumens,
+            multiplier,
+            vertical_angles: nv,
+            horizontal_angles: nh,
+            kind,
+            unit_m,
+            width,
+            length,
+            height,
+            ballast,
+            lamp_factor,
+            watts,
+        })
     }
+}
 
-    let (vertical, v_lines) = t.numbers(nv, "vertical angle")?;
-    let (horizontal, h_lines) = t.numbers(nh, "horizontal angle")?;
+/// The candela table: a row of `vertical.len()` values per horizontal angle, none
+/// negative; also the line the table starts on.
+fn candela_rows(
+    t: &mut Tokens,
+    vertical: &[f64],
+    horizontal: &[f64],
+) -> Result<(Vec<Vec<f64>>, usize)> {
+    let origin = t.origin();
     let mut rows = Vec::new();
     let mut table_line = 0;
-    for &h in &horizontal {
-        let (row, row_lines) =
-            t.numbers(nv, &format!("candela value at horizontal angle {h}°:"))?;
+    for &h in horizontal {
+        let (row, row_lines) = t.numbers(
+            vertical.len(),
+            &format!("candela value at horizontal angle {h}°:"),
+        )?;
         if table_line == 0 {
             table_line = row_lines[0];
         }
@@ -222,20 +319,33 @@ pub(crate) fn parse(text: &str, origin: &str, dir: &Path) -> Result<Photometry> 
         }
         rows.push(row);
     }
-    t.finish(&format!("({nv} vertical × {nh} horizontal angles)"))?;
+    Ok((rows, table_line))
+}
 
-    check_increasing(origin, &vertical, &v_lines, "vertical angle")?;
-    check_increasing(origin, &horizontal, &h_lines, "horizontal angle")?;
-    let tilt_factor = tilt.as_ref().map_or(1.0, |t| t.factor(0.0));
-    let lamp_output_factor = ballast * lamp_factor * tilt_factor;
-    let scale = multiplier * lamp_output_factor;
-    for row in &mut rows {
-        for v in row.iter_mut() {
-            *v *= scale;
-        }
-    }
+/// The file's angles and the lines they stand on.
+struct Angles {
+    vertical: Vec<f64>,
+    v_lines: Vec<usize>,
+    horizontal: Vec<f64>,
+    h_lines: Vec<usize>,
+}
 
-    let (symmetry, grid) = match kind {
+/// The candela `rows` (one per horizontal angle) on the grid of photometric type
+/// `kind`, with the symmetry the angles imply.
+fn grid(
+    origin: &str,
+    kind: PhotometricType,
+    angles: Angles,
+    rows: Vec<Vec<f64>>,
+) -> Result<(Symmetry, Grid)> {
+    let Angles {
+        vertical,
+        v_lines,
+        horizontal,
+        h_lines,
+    } = angles;
+    let (nv, nh) = (vertical.len(), horizontal.len());
+    match kind {
         PhotometricType::C => {
             check_range(origin, &vertical, &v_lines, "vertical angle", 0.0, 180.0)?;
             check_range(
@@ -258,7 +368,7 @@ pub(crate) fn parse(text: &str, origin: &str, dir: &Path) -> Result<Photometry> 
                 )
             })?;
             let (phi, planes) = c_planes(&horizontal, &rows, symmetry);
-            (symmetry, grid_of(TYPE_C, phi, vertical, &planes))
+            Ok((symmetry, grid_of(TYPE_C, phi, vertical, &planes)))
         }
         PhotometricType::A | PhotometricType::B => {
             check_range(origin, &vertical, &v_lines, "vertical angle", -90.0, 90.0)?;
@@ -293,28 +403,9 @@ pub(crate) fn parse(text: &str, origin: &str, dir: &Path) -> Result<Photometry> 
                     .collect();
                 grid_of(TYPE_B, vertical, lat(&h), &planes)
             };
-            (symmetry, grid)
+            Ok((symmetry, grid))
         }
-    };
-
-    Photometry::build(Parts {
-        file: origin.to_string(),
-        format: Format::Ies(year.unwrap_or(1986)),
-        photometric_type: kind,
-        symmetry,
-        grid,
-        table_line,
-        opening: opening(width * unit_m, length * unit_m),
-        height_m: height.abs() * unit_m,
-        lamp_flux_lm: (lumens > 0.0).then_some(lamps as f64 * lumens),
-        lamp_output_factor,
-        input_watts: Some(watts),
-        stated_light_output_ratio: None,
-        stated_downward_fraction: None,
-        tilt,
-        keywords,
-        lamp_sets: Vec::new(),
-    })
+    }
 }
 
 fn positive(origin: &str, line: usize, what: &str, v: f64) -> Result<()> {

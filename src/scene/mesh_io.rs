@@ -204,35 +204,7 @@ fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> 
     // MTL problems only matter when no `material` override is given, so keep the reason.
     let mtl_ok = match materials {
         Ok(mats) => {
-            for (k, m) in mats.iter().enumerate() {
-                let name = if m.name.is_empty() {
-                    k.to_string()
-                } else {
-                    m.name.clone()
-                };
-                match m.diffuse {
-                    Some(kd) => {
-                        let (reflectance, glossy_reflectance, roughness) = mtl_to_material(
-                            kd.map(f64::from),
-                            m.specular.map(|ks| ks.map(f64::from)),
-                            m.shininess.map(f64::from),
-                        );
-                        out.materials.push(FileMaterial {
-                            name,
-                            reflectance,
-                            glossy_reflectance,
-                            roughness,
-                        })
-                    }
-                    // No Kd: keep the slot (indices must stay aligned) but mark it unusable.
-                    None => out.materials.push(FileMaterial {
-                        name,
-                        reflectance: f64::NAN,
-                        glossy_reflectance: 0.0,
-                        roughness: 1.0,
-                    }),
-                }
-            }
+            out.materials = mats.iter().enumerate().map(obj_material).collect();
             true
         }
         Err(e) => {
@@ -240,57 +212,98 @@ fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> 
             false
         }
     };
-
     for model in &models {
-        let m = &model.mesh;
-        if !m.positions.len().is_multiple_of(3) || !m.indices.len().is_multiple_of(3) {
-            return Err(format!(
-                "malformed OBJ: model `{}` is incomplete",
-                model.name
-            ));
-        }
-        let base = out.mesh.vertices.len();
-        let count = m.positions.len() / 3;
-        for p in m.positions.chunks_exact(3) {
-            let v = DVec3::new(p[0].into(), p[1].into(), p[2].into());
-            out.mesh.vertices.push(check_vertex(v)?);
-        }
-        let material = match m.material_id {
-            Some(id) if mtl_ok => match out.materials.get(id) {
-                Some(fm) if fm.reflectance.is_nan() => {
-                    out.missing_reason = Some(format!("material `{}` has no Kd", fm.name));
-                    None
-                }
-                Some(_) => Some(id as u32),
-                None => {
-                    out.missing_reason = Some(format!("material index {id} is not in its MTL"));
-                    None
-                }
-            },
-            Some(_) => None,
-            None => {
-                out.missing_reason = Some(format!("object `{}` has no material", model.name));
-                None
-            }
-        };
-        for t in m.indices.chunks_exact(3) {
-            let mut tri = [0u32; 3];
-            for (slot, &i) in tri.iter_mut().zip(t) {
-                if i as usize >= count {
-                    return Err(format!(
-                        "malformed OBJ: face index {} out of range in `{}`",
-                        i + 1,
-                        model.name
-                    ));
-                }
-                *slot = u32::try_from(base + i as usize)
-                    .map_err(|_| "too many vertices".to_string())?;
-            }
-            out.mesh.triangles.push(tri);
-            out.material.push(material);
-        }
+        add_obj_model(&mut out, model, mtl_ok)?;
     }
     Ok(out)
+}
+
+/// MTL material `k`; one without Kd keeps its slot (indices must stay aligned) but is
+/// marked unusable (NaN reflectance).
+fn obj_material((k, m): (usize, &tobj::Material)) -> FileMaterial {
+    let name = if m.name.is_empty() {
+        k.to_string()
+    } else {
+        m.name.clone()
+    };
+    match m.diffuse {
+        Some(kd) => {
+            let (reflectance, glossy_reflectance, roughness) = mtl_to_material(
+                kd.map(f64::from),
+                m.specular.map(|ks| ks.map(f64::from)),
+                m.shininess.map(f64::from),
+            );
+            FileMaterial {
+                name,
+                reflectance,
+                glossy_reflectance,
+                roughness,
+            }
+        }
+        None => FileMaterial {
+            name,
+            reflectance: f64::NAN,
+            glossy_reflectance: 0.0,
+            roughness: 1.0,
+        },
+    }
+}
+
+/// Appends an OBJ model's vertices and triangles to `out`, with its MTL material when
+/// it has a usable one (`mtl_ok`: the MTL file loaded), else why not.
+fn add_obj_model(
+    out: &mut MeshFile,
+    model: &tobj::Model,
+    mtl_ok: bool,
+) -> std::result::Result<(), String> {
+    let m = &model.mesh;
+    if !m.positions.len().is_multiple_of(3) || !m.indices.len().is_multiple_of(3) {
+        return Err(format!(
+            "malformed OBJ: model `{}` is incomplete",
+            model.name
+        ));
+    }
+    let base = out.mesh.vertices.len();
+    let count = m.positions.len() / 3;
+    for p in m.positions.chunks_exact(3) {
+        let v = DVec3::new(p[0].into(), p[1].into(), p[2].into());
+        out.mesh.vertices.push(check_vertex(v)?);
+    }
+    let material = match m.material_id {
+        Some(id) if mtl_ok => match out.materials.get(id) {
+            Some(fm) if fm.reflectance.is_nan() => {
+                out.missing_reason = Some(format!("material `{}` has no Kd", fm.name));
+                None
+            }
+            Some(_) => Some(id as u32),
+            None => {
+                out.missing_reason = Some(format!("material index {id} is not in its MTL"));
+                None
+            }
+        },
+        Some(_) => None,
+        None => {
+            out.missing_reason = Some(format!("object `{}` has no material", model.name));
+            None
+        }
+    };
+    for t in m.indices.chunks_exact(3) {
+        let mut tri = [0u32; 3];
+        for (slot, &i) in tri.iter_mut().zip(t) {
+            if i as usize >= count {
+                return Err(format!(
+                    "malformed OBJ: face index {} out of range in `{}`",
+                    i + 1,
+                    model.name
+                ));
+            }
+            *slot =
+                u32::try_from(base + i as usize).map_err(|_| "too many vertices".to_string())?;
+        }
+        out.mesh.triangles.push(tri);
+        out.material.push(material);
+    }
+    Ok(())
 }
 
 /// Reads a glTF buffer's bytes: the GLB chunk, a base64 `data:` URI, or a file next to
