@@ -4,14 +4,17 @@
 //! Data path: `scene` (load and validate; `photometry` reads luminaires' files for it)
 //! → `accel` (ray casting backends) → `tally` (receivers and triangle maps: where and
 //! what scores) → `trace` (emission, BSDFs, photon batches, direct light) → `stats`
-//! (equations of method.md, forecast, stop criteria) → `run` (epochs) → `output`
-//! (summary.json and files) → `render` (the eye pass). `rng` and `sampling` serve them
-//! all; `limits` sizes a run before it allocates; `checkpoint` and `distributed` save,
-//! resume, shard and spread runs. Each module uses the ones before it, except
-//! `checkpoint`, which `run` calls back.
-//! `raster` (bitmap font, PNG encoder, palettes, quantile) uses nothing of the crate but
-//! its error type; `photometry`, `output` and `render` draw with it.
-//! docs/architecture.md has the whole data path.
+//! (equations of method.md, forecast, stop criteria) → `run` (validate, set up, epochs;
+//! `distributed` shares its chunks among processes) → `checkpoint` (save, resume, merge
+//! shards) → `output` (summary.json and files) → `render` (the eye pass) → `limits`
+//! (sizes a run or render before it allocates) → `bench`.
+//!
+//! Layering: each module uses only modules before it in this order, never one after
+//! it (no import cycles): `error`, `rng`, `sampling`, `raster` (bitmap font, PNG
+//! encoder, palettes, quantile), `criteria` (the stop criteria of the scene file, the
+//! command line and the run) → `photometry` → `scene` → `accel` → `tally` → `trace` →
+//! `stats` → `distributed` → `run` → `checkpoint` → `output` → `render` → `limits` →
+//! `bench`. docs/architecture.md has the whole data path.
 
 // `!(x > 0.0)` is deliberate throughout: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

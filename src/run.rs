@@ -185,22 +185,10 @@ pub fn run(
 ) -> Result<RunResult> {
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
-    run_with(scene, options, caster.as_ref(), setup, interrupt, observer)
-}
-
-/// [`run`] over a ray caster already built (`setup` is when building started).
-pub fn run_with(
-    scene: &Scene,
-    options: &RunOptions,
-    caster: &dyn RayCaster,
-    setup: Instant,
-    interrupt: &AtomicBool,
-    observer: &mut dyn Observer,
-) -> Result<RunResult> {
     run_from(
         scene,
         options,
-        caster,
+        caster.as_ref(),
         setup,
         interrupt,
         observer,
@@ -208,8 +196,8 @@ pub fn run_with(
     )
 }
 
-/// [`run_with`] from a checkpoint's state (`start.resumed`) and/or over a shard's photon
-/// range only (`start.shard`: no direct light, chunk partials kept for the merge).
+/// [`run`] over a ray caster already built (`setup` is when building started), from a
+/// checkpoint's state (`start.resumed`) and/or over a shard's photon range only (`start.shard`: no direct light, chunk partials kept for the merge).
 /// Validate, set up, then epochs until a stop criterion is met.
 pub fn run_from(
     scene: &Scene,

@@ -345,17 +345,14 @@ fn grid(
         h_lines,
     } = angles;
     let (nv, nh) = (vertical.len(), horizontal.len());
+    // Vertical and horizontal angles within their type's ranges (degrees).
+    let in_ranges = |(v0, v1), (h0, h1)| -> Result<()> {
+        check_range(origin, &vertical, &v_lines, "vertical angle", v0, v1)?;
+        check_range(origin, &horizontal, &h_lines, "horizontal angle", h0, h1)
+    };
     match kind {
         PhotometricType::C => {
-            check_range(origin, &vertical, &v_lines, "vertical angle", 0.0, 180.0)?;
-            check_range(
-                origin,
-                &horizontal,
-                &h_lines,
-                "horizontal angle",
-                0.0,
-                360.0,
-            )?;
+            in_ranges((0.0, 180.0), (0.0, 360.0))?;
             let symmetry = c_symmetry(&horizontal).ok_or_else(|| {
                 at(
                     origin,
@@ -371,15 +368,7 @@ fn grid(
             Ok((symmetry, grid_of(TYPE_C, phi, vertical, &planes)))
         }
         PhotometricType::A | PhotometricType::B => {
-            check_range(origin, &vertical, &v_lines, "vertical angle", -90.0, 90.0)?;
-            check_range(
-                origin,
-                &horizontal,
-                &h_lines,
-                "horizontal angle",
-                -90.0,
-                90.0,
-            )?;
+            in_ranges((-90.0, 90.0), (-90.0, 90.0))?;
             if nh < 2 {
                 return Err(at(
                     origin,
