@@ -18,7 +18,7 @@ use crate::accel::Backend;
 use crate::render::TILE_PIXELS;
 use crate::run::RunOptions;
 use crate::scene::file::{self, ObjectFile};
-use crate::scene::{shapes, Camera, LightKind, Scene};
+use crate::scene::{shapes, Camera, Scene};
 use crate::tally::{CellPartial, CellSums, CODES_PER_TRIANGLE};
 use crate::trace::CHUNK_PHOTONS;
 use crate::{Error, Result};
@@ -241,10 +241,7 @@ pub fn render_estimate(scene: &Scene, camera: &Camera, threads: usize) -> Estima
     let shadow_rays: f64 = scene
         .lights
         .iter()
-        .map(|l| match l.kind {
-            LightKind::Area { .. } => (camera.area_light_samples as f64).powi(2),
-            _ => 1.0,
-        })
+        .map(|l| l.kind.eye_shadow_rays(camera.area_light_samples))
         .sum();
     let tile = (w * h).min(TILE_PIXELS as f64);
     let threads = threads.max(1);

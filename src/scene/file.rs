@@ -3,7 +3,6 @@
 //! path). Nothing here checks physics; `load` validates and converts.
 
 use crate::error::{Error, Result};
-use serde::de::DeserializeOwned;
 use serde::Deserialize;
 
 /// The top level. Entries stay raw `toml::Value`s so each one is deserialised with its own
@@ -103,31 +102,6 @@ pub struct GridFile {
     pub spacing: [f64; 2],
 }
 
-/// One `[[lights]]` entry; `type` selects which fields are required.
-#[derive(Deserialize, Debug)]
-#[serde(deny_unknown_fields)]
-pub struct LightFile {
-    #[serde(rename = "type")]
-    pub kind: String,
-    pub position: Option<[f64; 3]>,
-    pub direction: Option<[f64; 3]>,
-    pub intensity_cd: Option<f64>,
-    pub flux_lm: Option<f64>,
-    pub cone_deg: Option<f64>,
-    pub falloff_deg: Option<f64>,
-    pub illuminance_lx: Option<f64>,
-    pub corner: Option<[f64; 3]>,
-    pub u: Option<[f64; 3]>,
-    pub v: Option<[f64; 3]>,
-    pub luminance_cdm2: Option<f64>,
-    /// Luminaires: the photometric file, where (one or many), how turned, how scaled.
-    pub file: Option<String>,
-    pub positions: Option<Vec<[f64; 3]>>,
-    pub aim: Option<[f64; 3]>,
-    pub rotate_deg: Option<f64>,
-    pub multiplier: Option<f64>,
-}
-
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct ReceiverFile {
@@ -170,10 +144,7 @@ pub struct CameraFile {
     pub max_depth: Option<u32>,
 }
 
-/// Collapses a possibly multi-line message into one line.
-pub fn one_line(text: &str) -> String {
-    text.split_whitespace().collect::<Vec<_>>().join(" ")
-}
+pub use crate::input::{entry, one_line};
 
 /// Parses the TOML text, rejects non-finite numbers, and deserialises the top level.
 pub fn parse(text: &str, origin: &str) -> Result<SceneFile> {
@@ -231,29 +202,4 @@ fn check_finite(value: &toml::Value, path: &mut String, origin: &str) -> Result<
         }
         _ => Ok(()),
     }
-}
-
-/// Deserialises one entry at key path `path`; serde's message names the field, and toml
-/// records the field's key for type errors, which is appended to the path.
-pub fn entry<T: DeserializeOwned>(value: toml::Value, origin: &str, path: &str) -> Result<T> {
-    value.try_into::<T>().map_err(|e| {
-        // toml's Display ends with "in `key.sub`" when it knows the field.
-        let shown = e.to_string();
-        let key = shown
-            .lines()
-            .filter_map(|l| l.strip_prefix("in `").and_then(|l| l.strip_suffix('`')))
-            .next_back();
-        let full = match (path.is_empty(), key) {
-            (true, None) => String::new(),
-            (true, Some(k)) => k.to_string(),
-            (false, None) => path.to_string(),
-            (false, Some(k)) => format!("{path}.{k}"),
-        };
-        let message = one_line(e.message());
-        if full.is_empty() {
-            Error::input(origin, message)
-        } else {
-            Error::input(format!("{origin}: {full}"), message)
-        }
-    })
 }

@@ -6,20 +6,20 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::file::{
-    self, CameraFile, InstanceFile, LightFile, MaterialFile, ObjectFile, ReceiverFile, ScaleFile,
+    self, CameraFile, InstanceFile, MaterialFile, ObjectFile, ReceiverFile, ScaleFile,
     SimulationFile,
 };
 use super::mesh_io;
 use super::shapes::{self, Mesh, Transform};
 use super::{
-    Camera, Estimator, Geometry, Light, LightKind, Luminaire, Material, Placement, PrototypeMesh,
-    Quantity, Receiver, Scene, Simulation,
+    Camera, Estimator, Geometry, Light, Material, Placement, PrototypeMesh, Quantity, Receiver,
+    Scene, Simulation,
 };
 use crate::error::{Error, Result};
-use crate::photometry::Photometry;
+use crate::input::{direction, required, vec3};
+use crate::light::{self, LoadContext};
 use glam::{DAffine3, DMat3, DVec3};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 /// Loads and validates the scene file at `path`; relative mesh paths resolve against its
 /// directory.
@@ -79,23 +79,11 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
     let geometry = builder.finish(origin)?;
 
     let mut lights = Vec::new();
-    let mut photometry = PhotometryCache::default();
+    let mut cx = LoadContext::new(base_dir);
     for (i, value) in raw.lights.into_iter().enumerate() {
-        let path = format!("lights[{i}]");
-        let light: LightFile = file::entry(value, origin, &path)?;
-        if light.kind == "luminaire" {
-            lights.extend(luminaires(
-                &light,
-                &path,
-                &at(&path),
-                base_dir,
-                &mut photometry,
-            )?);
-        } else {
-            lights.push(Light {
-                kind: light_kind(&light, &at(&path))?,
-                label: path,
-            });
+        let label = format!("lights[{i}]");
+        for (label, kind) in light::load_entry(value, &label, origin, &mut cx)? {
+            lights.push(Light { label, kind });
         }
     }
 
@@ -272,20 +260,7 @@ impl GeometryBuilder {
     }
 }
 
-fn vec3(a: [f64; 3]) -> DVec3 {
-    DVec3::from_array(a)
-}
-
-fn required<T: Copy>(x: Option<T>, at: &str, key: &str, what: &str) -> Result<T> {
-    x.ok_or_else(|| {
-        Error::input(
-            format!("{at}.{key}"),
-            format!("missing (required for {what})"),
-        )
-    })
-}
-
-/// Rejects keys that belong to another shape or light type, so a typo'd shape is loud.
+/// Rejects keys that belong to another shape, so a typo'd shape is loud.
 /// Errs on the first key of `present` that is set but not `allowed` for `what`.
 fn forbid(present: &[(&str, bool)], allowed: &[&str], at: &str, what: &str) -> Result<()> {
     match present
@@ -666,222 +641,6 @@ fn builtin_shape(o: &ObjectFile, shape: &str, at: &str) -> Result<Mesh> {
             format!("unknown shape `{other}` (expected \"box\", \"rect\" or \"sphere\")"),
         )),
     }
-}
-
-/// A direction the user wrote: normalised, zero rejected.
-fn direction(d: [f64; 3], at: &str, key: &str) -> Result<DVec3> {
-    vec3(d)
-        .try_normalize()
-        .ok_or_else(|| Error::input(format!("{at}.{key}"), "zero direction"))
-}
-
-/// A photometric amount: finite and ≥ 0 (zero is allowed: a switched-off source).
-fn amount(x: f64, at: &str, key: &str) -> Result<f64> {
-    if x.is_finite() && x >= 0.0 {
-        Ok(x)
-    } else {
-        Err(Error::input(
-            format!("{at}.{key}"),
-            format!("must be ≥ 0, got {x}"),
-        ))
-    }
-}
-
-/// The keys of every light type, and whether a `[[lights]]` entry sets each.
-fn light_keys(l: &LightFile) -> [(&'static str, bool); 16] {
-    [
-        ("position", l.position.is_some()),
-        ("direction", l.direction.is_some()),
-        ("intensity_cd", l.intensity_cd.is_some()),
-        ("flux_lm", l.flux_lm.is_some()),
-        ("cone_deg", l.cone_deg.is_some()),
-        ("falloff_deg", l.falloff_deg.is_some()),
-        ("illuminance_lx", l.illuminance_lx.is_some()),
-        ("corner", l.corner.is_some()),
-        ("u", l.u.is_some()),
-        ("v", l.v.is_some()),
-        ("luminance_cdm2", l.luminance_cdm2.is_some()),
-        ("file", l.file.is_some()),
-        ("positions", l.positions.is_some()),
-        ("aim", l.aim.is_some()),
-        ("rotate_deg", l.rotate_deg.is_some()),
-        ("multiplier", l.multiplier.is_some()),
-    ]
-}
-
-fn light_kind(l: &LightFile, at: &str) -> Result<LightKind> {
-    let what = format!("type \"{}\" lights", l.kind);
-    let light_keys = light_keys(l);
-    let set = |allowed: &[&str]| forbid(&light_keys, allowed, at, &what);
-    match l.kind.as_str() {
-        "point" => {
-            set(&["position", "intensity_cd", "flux_lm"])?;
-            let position = vec3(required(l.position, at, "position", &what)?);
-            let intensity_cd = match (l.intensity_cd, l.flux_lm) {
-                (Some(i), None) => amount(i, at, "intensity_cd")?,
-                // Isotropic: Φ = 4π I.
-                (None, Some(f)) => amount(f, at, "flux_lm")? / (4.0 * std::f64::consts::PI),
-                _ => return Err(Error::input(at, "give exactly one of `intensity_cd` and `flux_lm`")),
-            };
-            Ok(LightKind::Point {
-                position,
-                intensity_cd,
-            })
-        }
-        "spot" => {
-            set(&["position", "direction", "intensity_cd", "cone_deg", "falloff_deg"])?;
-            let position = vec3(required(l.position, at, "position", &what)?);
-            let direction = direction(required(l.direction, at, "direction", &what)?, at, "direction")?;
-            let intensity_cd = amount(required(l.intensity_cd, at, "intensity_cd", &what)?, at, "intensity_cd")?;
-            let cone_deg = required(l.cone_deg, at, "cone_deg", &what)?;
-            if !(cone_deg > 0.0 && cone_deg <= 180.0) {
-                return Err(Error::input(format!("{at}.cone_deg"), format!("must be in (0, 180], got {cone_deg}")));
-            }
-            let falloff_deg = l.falloff_deg.unwrap_or(cone_deg);
-            if !(falloff_deg >= 0.0 && falloff_deg <= cone_deg) {
-                return Err(Error::input(
-                    format!("{at}.falloff_deg"),
-                    format!("must be in [0, cone_deg = {cone_deg}], got {falloff_deg}"),
-                ));
-            }
-            Ok(LightKind::Spot {
-                position,
-                direction,
-                intensity_cd,
-                cone_deg,
-                falloff_deg,
-            })
-        }
-        "directional" => {
-            set(&["direction", "illuminance_lx"])?;
-            let direction = direction(required(l.direction, at, "direction", &what)?, at, "direction")?;
-            let illuminance_lx =
-                amount(required(l.illuminance_lx, at, "illuminance_lx", &what)?, at, "illuminance_lx")?;
-            Ok(LightKind::Directional {
-                direction,
-                illuminance_lx,
-            })
-        }
-        "area" => {
-            set(&["corner", "u", "v", "flux_lm", "luminance_cdm2"])?;
-            let corner = vec3(required(l.corner, at, "corner", &what)?);
-            let u = vec3(required(l.u, at, "u", &what)?);
-            let v = vec3(required(l.v, at, "v", &what)?);
-            let area = u.cross(v).length();
-            if !(area > 0.0) {
-                return Err(Error::input(at, "zero-area light: u × v = 0"));
-            }
-            let luminance_cdm2 = match (l.flux_lm, l.luminance_cdm2) {
-                // One-sided Lambertian emitter: Φ = π L A.
-                (Some(f), None) => amount(f, at, "flux_lm")? / (std::f64::consts::PI * area),
-                (None, Some(lum)) => amount(lum, at, "luminance_cdm2")?,
-                _ => return Err(Error::input(at, "give exactly one of `flux_lm` and `luminance_cdm2`")),
-            };
-            Ok(LightKind::Area {
-                corner,
-                u,
-                v,
-                luminance_cdm2,
-            })
-        }
-        other => Err(Error::input(
-            format!("{at}.type"),
-            format!("unknown light type `{other}` (expected \"point\", \"spot\", \"directional\", \"area\" or \"luminaire\")"),
-        )),
-    }
-}
-
-/// Photometric files loaded so far, by path: luminaires of one file share it.
-#[derive(Default)]
-struct PhotometryCache(Vec<(PathBuf, Arc<Photometry>)>);
-
-impl PhotometryCache {
-    fn load(&mut self, path: &Path) -> Result<Arc<Photometry>> {
-        if let Some((_, p)) = self.0.iter().find(|(q, _)| q == path) {
-            return Ok(p.clone());
-        }
-        let p = Arc::new(crate::photometry::load(path)?);
-        self.0.push((path.to_path_buf(), p.clone()));
-        Ok(p)
-    }
-}
-
-/// A `type = "luminaire"` entry: one light per position (`position`, or each of
-/// `positions`, labelled `lights[i].positions[k]`).
-fn luminaires(
-    l: &LightFile,
-    label: &str,
-    at: &str,
-    base_dir: &Path,
-    cache: &mut PhotometryCache,
-) -> Result<Vec<Light>> {
-    let what = "type \"luminaire\" lights";
-    forbid(
-        &light_keys(l),
-        &[
-            "position",
-            "positions",
-            "file",
-            "aim",
-            "rotate_deg",
-            "multiplier",
-            "flux_lm",
-        ],
-        at,
-        what,
-    )?;
-    let file = required(l.file.as_ref(), at, "file", what)?;
-    let photometry = cache.load(&base_dir.join(file))?;
-    let positions: Vec<(String, DVec3)> = match (&l.position, &l.positions) {
-        (Some(p), None) => vec![(label.to_string(), vec3(*p))],
-        (None, Some(ps)) if !ps.is_empty() => ps
-            .iter()
-            .enumerate()
-            .map(|(k, p)| (format!("{label}.positions[{k}]"), vec3(*p)))
-            .collect(),
-        (None, Some(_)) => return Err(Error::input(format!("{at}.positions"), "is empty")),
-        _ => {
-            return Err(Error::input(
-                at,
-                "give exactly one of `position` and `positions`",
-            ))
-        }
-    };
-    let aim = direction(l.aim.unwrap_or([0.0, 0.0, -1.0]), at, "aim")?;
-    let multiplier = amount(l.multiplier.unwrap_or(1.0), at, "multiplier")?;
-    let file_flux = photometry.flux_lm();
-    let rescale = match l.flux_lm {
-        None => 1.0,
-        Some(f) if file_flux > 0.0 => amount(f, at, "flux_lm")? / file_flux,
-        Some(_) => {
-            return Err(Error::input(
-                format!("{at}.flux_lm"),
-                format!("`{file}` emits no flux: it cannot be rescaled"),
-            ))
-        }
-    };
-    // The table holds the lamp's output at the photometered position (tilt 0); a
-    // luminaire tilted from it (aim away from straight down) gets the file's tilt
-    // factor at that angle relative to it.
-    let tilt = match &photometry.tilt {
-        Some(t) if t.factor(0.0) > 0.0 => {
-            t.factor(aim.dot(-DVec3::Z).clamp(-1.0, 1.0).acos().to_degrees()) / t.factor(0.0)
-        }
-        _ => 1.0,
-    };
-    let frame = Luminaire::frame(aim, l.rotate_deg.unwrap_or(0.0));
-    Ok(positions
-        .into_iter()
-        .map(|(label, position)| Light {
-            label,
-            kind: LightKind::Luminaire(Luminaire {
-                photometry: photometry.clone(),
-                position,
-                frame,
-                scale: multiplier * rescale * tilt,
-            }),
-        })
-        .collect())
 }
 
 fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
