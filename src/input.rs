@@ -12,23 +12,21 @@ pub fn one_line(text: &str) -> String {
     text.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
-/// Deserialises one entry at key path `path`; serde's message names the field, and toml
-/// records the field's key for type errors, which is appended to the path.
+/// Deserialises one entry at key path `path` (`objects[2]`, empty for the top level);
+/// messages name the full path of the key at fault (`objects[2].radius`).
 pub fn entry<T: DeserializeOwned>(value: toml::Value, origin: &str, path: &str) -> Result<T> {
-    value.try_into::<T>().map_err(|e| {
-        // toml's Display ends with "in `key.sub`" when it knows the field.
-        let shown = e.to_string();
-        let key = shown
-            .lines()
-            .filter_map(|l| l.strip_prefix("in `").and_then(|l| l.strip_suffix('`')))
-            .next_back();
-        let full = match (path.is_empty(), key) {
-            (true, None) => String::new(),
-            (true, Some(k)) => k.to_string(),
-            (false, None) => path.to_string(),
-            (false, Some(k)) => format!("{path}.{k}"),
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let inner = match e.path().to_string() {
+            p if p == "." => String::new(),
+            p => p,
         };
-        let message = one_line(e.message());
+        let full = match (path.is_empty(), inner.is_empty()) {
+            (_, true) => path.to_string(),
+            (true, false) => inner,
+            (false, false) if inner.starts_with('[') => format!("{path}{inner}"),
+            (false, false) => format!("{path}.{inner}"),
+        };
+        let message = one_line(e.inner().message());
         if full.is_empty() {
             Error::input(origin, message)
         } else {
@@ -36,6 +34,9 @@ pub fn entry<T: DeserializeOwned>(value: toml::Value, origin: &str, path: &str) 
         }
     })
 }
+
+/// A struct's key list, asked for when needed: `fields_of::<T>`.
+pub type Fields = fn() -> &'static [&'static str];
 
 /// The keys a derived `Deserialize` struct accepts, as its derive lists them (renames
 /// applied): read by asking it to deserialise from a probe that records the list.
@@ -69,6 +70,32 @@ impl<'de> Deserializer<'de> for FieldProbe<'_> {
         byte_buf option unit unit_struct newtype_struct seq tuple tuple_struct map enum
         identifier ignored_any
     }
+}
+
+/// Rejects the first key of `table` that `own` (the keys of `what`, e.g. `shape "box"`)
+/// does not list: `at.key: does not apply to WHAT` when one of `others` takes it (a typo'd
+/// type is loud), an unknown field otherwise.
+pub fn check_keys(
+    table: &toml::Table,
+    own: &[&str],
+    others: &[&[&str]],
+    at: &str,
+    what: &str,
+) -> Result<()> {
+    let Some(key) = table.keys().find(|k| !own.contains(&k.as_str())) else {
+        return Ok(());
+    };
+    let message = if others.iter().any(|o| o.contains(&key.as_str())) {
+        format!("does not apply to {what}")
+    } else if own.is_empty() {
+        format!("unknown field `{key}`")
+    } else {
+        format!(
+            "unknown field `{key}` for {what} (expected one of `{}`)",
+            own.join("`, `")
+        )
+    };
+    Err(Error::input(format!("{at}.{key}"), message))
 }
 
 pub fn vec3(a: [f64; 3]) -> DVec3 {

@@ -17,8 +17,8 @@
 use crate::accel::Backend;
 use crate::render::TILE_PIXELS;
 use crate::run::RunOptions;
-use crate::scene::file::{self, ObjectFile};
-use crate::scene::{shapes, Camera, Scene};
+use crate::scene::file::{self, Source};
+use crate::scene::{Camera, Scene};
 use crate::tally::{CellPartial, CellSums, CODES_PER_TRIANGLE};
 use crate::trace::CHUNK_PHOTONS;
 use crate::{Error, Result};
@@ -315,10 +315,12 @@ pub fn check_scene_file(path: &Path, backend: Backend, budget: &Budget) -> Resul
     let triangles: u64 = raw
         .objects
         .into_iter()
-        .filter_map(|value| {
-            let o: ObjectFile = file::entry(value, &origin, "objects").ok()?;
-            shapes::triangle_count(o.shape.as_deref()?, o.subdivisions)
-        })
+        .filter_map(
+            |value| match file::object(value, &origin, "objects").ok()?.source {
+                Source::Shape(shape) => shape.triangle_count(),
+                Source::File(_) => None,
+            },
+        )
         .fold(0, u64::saturating_add);
     budget.check(&origin, &geometry_estimate(triangles, backend))
 }

@@ -149,7 +149,7 @@ impl<'a> LoadContext<'a> {
 /// One kind of the registry.
 struct Kind {
     name: &'static str,
-    fields: fn() -> &'static [&'static str],
+    fields: input::Fields,
     load: fn(toml::Value, &str, &str, &mut LoadContext) -> Result<Vec<Labelled>>,
 }
 
@@ -208,22 +208,9 @@ pub fn load_entry(
             format!("unknown light type `{kind}` (expected {})", names()),
         ));
     };
-    let fields = (k.fields)();
-    if let Some(key) = table.keys().find(|key| !fields.contains(&key.as_str())) {
-        let what = format!("type \"{kind}\" lights");
-        let other = KINDS.iter().any(|o| (o.fields)().contains(&key.as_str()));
-        return Err(Error::input(
-            format!("{at}.{key}"),
-            if other {
-                format!("does not apply to {what}")
-            } else {
-                format!(
-                    "unknown field `{key}` for {what} (expected one of `{}`)",
-                    fields.join("`, `")
-                )
-            },
-        ));
-    }
+    let others: Vec<&[&str]> = KINDS.iter().map(|o| (o.fields)()).collect();
+    let what = format!("type \"{kind}\" lights");
+    input::check_keys(&table, (k.fields)(), &others, &at, &what)?;
     (k.load)(toml::Value::Table(table), label, origin, cx)
 }
 

@@ -186,6 +186,37 @@ fn check_vertex(p: DVec3) -> std::result::Result<DVec3, String> {
     }
 }
 
+/// MTL material `k` as a file material named by its name (or index).
+fn mtl_material((k, m): (usize, &tobj::Material)) -> FileMaterial {
+    let name = if m.name.is_empty() {
+        k.to_string()
+    } else {
+        m.name.clone()
+    };
+    match m.diffuse {
+        Some(kd) => {
+            let (reflectance, glossy_reflectance, roughness) = mtl_to_material(
+                kd.map(f64::from),
+                m.specular.map(|ks| ks.map(f64::from)),
+                m.shininess.map(f64::from),
+            );
+            FileMaterial {
+                name,
+                reflectance,
+                glossy_reflectance,
+                roughness,
+            }
+        }
+        // No Kd: keep the slot (indices must stay aligned) but mark it unusable.
+        None => FileMaterial {
+            name,
+            reflectance: f64::NAN,
+            glossy_reflectance: 0.0,
+            roughness: 1.0,
+        },
+    }
+}
+
 fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> {
     let options = tobj::LoadOptions {
         triangulate: true,
@@ -204,35 +235,7 @@ fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> 
     // MTL problems only matter when no `material` override is given, so keep the reason.
     let mtl_ok = match materials {
         Ok(mats) => {
-            for (k, m) in mats.iter().enumerate() {
-                let name = if m.name.is_empty() {
-                    k.to_string()
-                } else {
-                    m.name.clone()
-                };
-                match m.diffuse {
-                    Some(kd) => {
-                        let (reflectance, glossy_reflectance, roughness) = mtl_to_material(
-                            kd.map(f64::from),
-                            m.specular.map(|ks| ks.map(f64::from)),
-                            m.shininess.map(f64::from),
-                        );
-                        out.materials.push(FileMaterial {
-                            name,
-                            reflectance,
-                            glossy_reflectance,
-                            roughness,
-                        })
-                    }
-                    // No Kd: keep the slot (indices must stay aligned) but mark it unusable.
-                    None => out.materials.push(FileMaterial {
-                        name,
-                        reflectance: f64::NAN,
-                        glossy_reflectance: 0.0,
-                        roughness: 1.0,
-                    }),
-                }
-            }
+            out.materials = mats.iter().enumerate().map(mtl_material).collect();
             true
         }
         Err(e) => {

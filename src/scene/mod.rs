@@ -280,8 +280,9 @@ pub enum Quantity {
     },
 }
 
-/// How a receiver is scored.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+/// How a receiver is scored (`estimator = "track" | "next_event" | "auto"`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Estimator {
     /// Analog: a cell scores when a photon crosses it.
     #[default]
