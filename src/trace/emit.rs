@@ -2,13 +2,11 @@
 //! frame (`crate::light::Emitter`), their fluxes, and how photons are shared among them.
 //! What each kind emits lives in `crate::light`; nothing here knows the kinds.
 
-use crate::light::{BoundingSphere, Emitter};
+use crate::light::{BoundingSphere, Emitter, Incoming};
 use crate::scene::Scene;
 use glam::DVec3;
 use rand_pcg::Pcg32;
 use std::sync::Arc;
-
-pub use crate::light::{spot_profile, Incoming};
 
 /// The lights of a scene, with the cumulative distribution of their flux used to share
 /// photons among them.
