@@ -443,7 +443,8 @@ pub fn bench_rays(
 /// A scene for photon benchmarks over `geometry`: one grey Lambertian material
 /// (ρ = 0.5) on every triangle and a point light at the centre of the bounds' top tenth.
 pub fn lit_scene(name: &str, mut geometry: Geometry) -> crate::scene::Scene {
-    use crate::scene::{Light, LightKind, Material, Scene};
+    use crate::light::Point;
+    use crate::scene::{Light, Material, Scene};
     geometry.material.iter_mut().for_each(|m| *m = 0);
     let (lo, hi) = geometry.world_bounds().unwrap_or((DVec3::ZERO, DVec3::ONE));
     let position = DVec3::new(
@@ -455,13 +456,13 @@ pub fn lit_scene(name: &str, mut geometry: Geometry) -> crate::scene::Scene {
         name: name.to_string(),
         materials: vec![Material::lambertian("grey", 0.5)],
         geometry,
-        lights: vec![Light {
-            label: "lights[0]".into(),
-            kind: LightKind::Point {
+        lights: vec![Light::new(
+            "lights[0]",
+            Point {
                 position,
                 intensity_cd: 1000.0,
             },
-        }],
+        )],
         ..Scene::default()
     }
 }

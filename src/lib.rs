@@ -1,7 +1,8 @@
 //! luxtally: forward Monte Carlo photon tracing that tallies light on scene surfaces and
 //! virtual receivers, and reports, forecasts and controls its own statistical error.
 //!
-//! Data path: `scene` (load and validate; `photometry` reads luminaires' files for it)
+//! Data path: `scene` (load and validate; `light` holds each light kind — its entry,
+//! validation and emission — and `photometry` reads luminaires' files for it)
 //! → `accel` (ray casting backends) → `tally` (receivers and triangle maps: where and
 //! what scores) → `trace` (emission, BSDFs, photon batches, direct light) → `stats`
 //! (equations of method.md, forecast, stop criteria) → `run` (validate, set up, epochs;
@@ -12,7 +13,8 @@
 //! Layering: each module uses only modules before it in this order, never one after
 //! it (no import cycles): `error`, `rng`, `sampling`, `raster` (bitmap font, PNG
 //! encoder, palettes, quantile), `criteria` (the stop criteria of the scene file, the
-//! command line and the run) → `photometry` → `scene` → `accel` → `tally` → `trace` →
+//! command line and the run), `input` (scene-file entries read with their key path,
+//! value checks) → `photometry` → `light` → `scene` → `accel` → `tally` → `trace` →
 //! `stats` → `distributed` → `run` → `checkpoint` → `output` → `render` → `limits` →
 //! `bench`. docs/architecture.md has the whole data path.
 
@@ -25,6 +27,8 @@ pub mod checkpoint;
 pub mod criteria;
 pub mod distributed;
 pub mod error;
+pub mod input;
+pub mod light;
 pub mod limits;
 pub mod output;
 pub mod photometry;

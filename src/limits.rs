@@ -17,8 +17,8 @@
 use crate::accel::Backend;
 use crate::render::TILE_PIXELS;
 use crate::run::RunOptions;
-use crate::scene::file::{self, ObjectFile};
-use crate::scene::{shapes, Camera, LightKind, Scene};
+use crate::scene::file::{self, Source};
+use crate::scene::{Camera, Scene};
 use crate::tally::{CellPartial, CellSums, CODES_PER_TRIANGLE};
 use crate::trace::CHUNK_PHOTONS;
 use crate::{Error, Result};
@@ -237,10 +237,7 @@ pub fn render_estimate(scene: &Scene, camera: &Camera, threads: usize) -> Estima
     let shadow_rays: f64 = scene
         .lights
         .iter()
-        .map(|l| match l.kind {
-            LightKind::Area { .. } => (camera.area_light_samples as f64).powi(2),
-            _ => 1.0,
-        })
+        .map(|l| l.kind.eye_shadow_rays(camera.area_light_samples))
         .sum();
     let tile = (w * h).min(TILE_PIXELS as f64);
     let threads = threads.max(1);
@@ -314,10 +311,12 @@ pub fn check_scene_file(path: &Path, backend: Backend, budget: &Budget) -> Resul
     let triangles: u64 = raw
         .objects
         .into_iter()
-        .filter_map(|value| {
-            let o: ObjectFile = file::entry(value, &origin, "objects").ok()?;
-            shapes::triangle_count(o.shape.as_deref()?, o.subdivisions)
-        })
+        .filter_map(
+            |value| match file::object(value, &origin, "objects").ok()?.source {
+                Source::Shape(shape) => shape.triangle_count(),
+                Source::File(_) => None,
+            },
+        )
         .fold(0, u64::saturating_add);
     budget.check(&origin, &geometry_estimate(triangles, backend))
 }

@@ -11,7 +11,7 @@ use luxtally::limits;
 use luxtally::output::{summary, write_atomic};
 use luxtally::render::{self, IndirectMap, MAP_FILE};
 use luxtally::run::{run_from, Observer, RunOptions, RunResult, RunState, ShardRange, Start};
-use luxtally::scene::{Estimator, LightKind, Scene};
+use luxtally::scene::{Estimator, Scene};
 use luxtally::{Error, Result};
 use progress::Progress;
 use std::path::{Path, PathBuf};
@@ -925,29 +925,7 @@ fn info_command(path: &Path) -> Result<()> {
         }
     }
     for l in &scene.lights {
-        match &l.kind {
-            LightKind::Luminaire(lum) => {
-                let p = &lum.photometry;
-                let peak = p.peak();
-                println!(
-                    "  {}: luminaire {} at {:.3?}: {:.1} lm (file {:.1} lm × {}), light output ratio {}, peak {:.1} cd at C {:.1}° γ {:.1}°, {} symmetry, opening {}",
-                    l.label,
-                    p.file,
-                    lum.position.to_array(),
-                    lum.flux_lm(),
-                    p.flux_lm(),
-                    lum.scale,
-                    p.light_output_ratio()
-                        .map_or("– (absolute photometry)".into(), |r| format!("{r:.3}")),
-                    peak.intensity_cd * lum.scale,
-                    peak.c_deg,
-                    peak.gamma_deg,
-                    p.symmetry.describe(),
-                    p.opening.describe()
-                );
-            }
-            kind => println!("  {}: {kind:?}", l.label),
-        }
+        println!("  {}: {}", l.label, l.kind.describe());
     }
     for r in &scene.receivers {
         println!(

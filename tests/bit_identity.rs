@@ -41,9 +41,11 @@ fn cpu_identity() -> String {
     )
 }
 
-/// Timings, thread counts and what derives from them differ between identical runs.
+/// Timings, thread counts and what derives from them (the figure of merit's stability
+/// and the `reliable` verdict it feeds) differ between identical runs.
 fn is_timing(key: &str) -> bool {
     key == "threads"
+        || key == "reliable"
         || key.ends_with("_s")
         || key.ends_with("_share")
         || key.ends_with("per_s")

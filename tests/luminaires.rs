@@ -7,7 +7,7 @@ mod common;
 use common::*;
 use glam::DVec3;
 use luxtally::photometry::{self, Photometry};
-use luxtally::scene::{load, Estimator, LightKind};
+use luxtally::scene::{load, Estimator, Luminaire};
 use std::path::{Path, PathBuf};
 
 fn data(name: &str) -> String {
@@ -270,7 +270,7 @@ fn the_bundled_luminaires_scene_lights_its_workplane_from_examp1() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/luminaires.toml");
     let scene = load(&path).expect("bundled scene loads");
     assert_eq!(scene.lights.len(), 6);
-    let LightKind::Luminaire(l) = &scene.lights[0].kind else {
+    let Some(l) = scene.lights[0].get::<Luminaire>() else {
         panic!("a luminaire")
     };
     assert!((l.flux_lm() - 5296.65).abs() < 0.01);

@@ -2,7 +2,8 @@
 //! office scene. Expected values come from geometry, computed here.
 
 use glam::DVec3;
-use luxtally::scene::{self, Estimator, LightKind, Quantity, Scene};
+use luxtally::light::{Area, Point, Spot};
+use luxtally::scene::{self, Estimator, Quantity, Scene};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 
@@ -57,11 +58,11 @@ fn bundled_office_scene_loads_as_the_contract_describes() {
     let table = 1.6 * 0.8;
     assert!((s.geometry.total_area_m2() - (room + table)).abs() < 1e-9);
     assert_eq!(
-        s.lights[0].kind,
-        LightKind::Point {
+        s.lights[0].get::<Point>(),
+        Some(&Point {
             position: DVec3::new(3.0, 2.5, 2.8),
             intensity_cd: 1000.0
-        }
+        })
     );
     assert_eq!(s.lights[0].label, "lights[0]");
     let desk = &s.receivers[0];
@@ -426,30 +427,30 @@ min_hits = 100
 "#,
     );
     assert_eq!(s.name, "all");
-    match s.lights[0].kind {
-        LightKind::Point { intensity_cd, .. } => {
+    match s.lights[0].get::<Point>() {
+        Some(&Point { intensity_cd, .. }) => {
             assert!((intensity_cd - 1000.0 / (4.0 * PI)).abs() < 1e-12)
         }
-        ref k => panic!("{k:?}"),
+        _ => panic!("{:?}", s.lights),
     }
-    match s.lights[1].kind {
-        LightKind::Spot {
+    match s.lights[1].get::<Spot>() {
+        Some(&Spot {
             direction,
             falloff_deg,
             cone_deg,
             ..
-        } => {
+        }) => {
             assert_eq!(direction, DVec3::NEG_Z);
             assert_eq!(falloff_deg, cone_deg);
         }
-        ref k => panic!("{k:?}"),
+        _ => panic!("{:?}", s.lights),
     }
-    match s.lights[3].kind {
+    match s.lights[3].get::<Area>() {
         // Φ = π L A.
-        LightKind::Area { luminance_cdm2, .. } => {
+        Some(&Area { luminance_cdm2, .. }) => {
             assert!((luminance_cdm2 - 3000.0 / (PI * 2.0)).abs() < 1e-9)
         }
-        ref k => panic!("{k:?}"),
+        _ => panic!("{:?}", s.lights),
     }
     let r = &s.receivers[0];
     assert_eq!(r.estimator, Estimator::NextEvent);

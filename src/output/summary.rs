@@ -305,10 +305,9 @@ fn luminaires(scene: &crate::scene::Scene) -> Vec<LuminaireSummary> {
     use base64::Engine;
     let mut out: Vec<LuminaireSummary> = Vec::new();
     for light in &scene.lights {
-        let crate::scene::LightKind::Luminaire(l) = &light.kind else {
+        let Some(p) = light.kind.photometry() else {
             continue;
         };
-        let p = &l.photometry;
         if let Some(seen) = out.iter_mut().find(|s| s.file == p.file) {
             seen.count += 1;
             continue;

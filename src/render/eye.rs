@@ -11,7 +11,7 @@ use crate::rng::photon_stream;
 use crate::sampling::uniform;
 use crate::scene::{Camera, Material, Scene};
 use crate::trace::bsdf::{fr_dielectric, Bsdf};
-use crate::trace::emit::{Emitter, Emitters};
+use crate::trace::emit::Emitters;
 use crate::trace::scatter::{offset_origin, reflect, refract};
 use glam::{DVec3, Vec3};
 use rand_pcg::Pcg32;
@@ -482,34 +482,13 @@ impl<'a> EyePass<'a> {
         }
     }
 
-    /// Luminance of an area source the ray meets from its emitting side before `t_hit`
-    /// (the sources are not scene geometry; the eye still sees them).
+    /// Luminance of the sources the ray meets from their emitting side before `t_hit`
+    /// (area sources: they are not scene geometry; the eye still sees them).
     fn area_light_seen(&self, o: DVec3, dir: DVec3, t_hit: f64) -> f64 {
         let mut l = 0.0;
-        for (light, emitter) in self.lights.emitters.iter().enumerate() {
-            if let Emitter::Area {
-                corner,
-                u,
-                v,
-                normal,
-            } = *emitter
-            {
-                let cos = dir.dot(normal);
-                if cos >= 0.0 {
-                    continue;
-                }
-                let t = (corner - o).dot(normal) / cos;
-                if !(t > 0.0 && t < t_hit) {
-                    continue;
-                }
-                // Coordinates of the hit in the (u, v) parallelogram.
-                let r = o + dir * t - corner;
-                let uv = u.cross(v);
-                let a = r.cross(v).dot(uv) / uv.length_squared();
-                let b = u.cross(r).dot(uv) / uv.length_squared();
-                if (0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b) {
-                    l += self.lights.intensity_scale[light];
-                }
+        for emitter in &self.lights.emitters {
+            if let Some(luminance_cdm2) = emitter.luminance_seen(o, dir, t_hit) {
+                l += luminance_cdm2;
             }
         }
         l

@@ -1,27 +1,32 @@
 //! The scene file as written: serde structs mirroring the TOML of the contract, and the
-//! TOML front end (syntax errors, non-finite numbers, per-entry deserialisation with a key
-//! path). Nothing here checks physics; `load` validates and converts.
+//! TOML front end (syntax errors, non-finite numbers, deserialisation whose messages name
+//! the key path, `objects[2].radius`, through `serde_path_to_error`). Nothing here checks
+//! physics; `load` validates and converts.
 
+use super::shapes;
+use super::Estimator;
 use crate::error::{Error, Result};
-use serde::de::DeserializeOwned;
+use crate::input::{self, check_keys};
 use serde::Deserialize;
+use std::collections::BTreeMap;
 
-/// The top level. Entries stay raw `toml::Value`s so each one is deserialised with its own
-/// key path (`objects[2]`) for messages: serde does not report array indices.
+/// The top level. Objects and lights stay raw `toml::Value`s: what they are depends on
+/// a key (`shape`/`file`, `type`), and each is read as that with its own key path.
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
     pub name: Option<String>,
+    /// By name, in name order (as TOML tables iterate).
     #[serde(default)]
-    pub materials: toml::Table,
+    pub materials: BTreeMap<String, MaterialFile>,
     #[serde(default)]
     pub objects: Vec<toml::Value>,
     #[serde(default)]
     pub lights: Vec<toml::Value>,
     #[serde(default)]
-    pub receivers: Vec<toml::Value>,
+    pub receivers: Vec<ReceiverFile>,
     pub simulation: Option<toml::Value>,
-    pub camera: Option<toml::Value>,
+    pub camera: Option<CameraFile>,
 }
 
 #[derive(Deserialize, Debug)]
@@ -51,28 +56,91 @@ fn default_ior() -> f64 {
 
 /// `scale = 2` or `scale = [1, 2, 1]`.
 #[derive(Deserialize, Debug, Clone, Copy)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a number or an array of 3 numbers")]
 pub enum ScaleFile {
     Uniform(f64),
     PerAxis([f64; 3]),
 }
 
-/// One `[[objects]]` entry. All shape parameters are optional here; `load` checks that the
-/// ones the shape needs are present and that no other shape's parameters are set.
+/// One `[[objects]]` entry: where its triangles come from (`shape = ...` and that
+/// shape's keys, or `file = ...`), and the keys every object takes.
+#[derive(Debug)]
+pub struct ObjectEntry {
+    pub source: Source,
+    pub object: ObjectFile,
+}
+
+/// Where an object's triangles come from.
+#[derive(Debug)]
+pub enum Source {
+    Shape(ShapeFile),
+    /// A mesh file (OBJ, glTF), relative to the scene file.
+    File(String),
+}
+
+/// A built-in shape: `shape = "box" | "rect" | "sphere"` and its keys. Keys are optional
+/// here so that `load` names a missing one (`objects[0].max: missing`).
+#[derive(Debug)]
+pub enum ShapeFile {
+    Box(BoxFile),
+    Rect(RectFile),
+    Sphere(SphereFile),
+}
+
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
-pub struct ObjectFile {
-    pub shape: Option<String>,
-    pub file: Option<String>,
-    pub material: Option<String>,
+pub struct BoxFile {
     pub min: Option<[f64; 3]>,
     pub max: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct RectFile {
     pub corner: Option<[f64; 3]>,
     pub u: Option<[f64; 3]>,
     pub v: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SphereFile {
     pub center: Option<[f64; 3]>,
     pub radius: Option<f64>,
     pub subdivisions: Option<u32>,
+}
+
+/// The shapes by name, with the keys each takes.
+const SHAPES: [(&str, input::Fields); 3] = [
+    ("box", input::fields_of::<BoxFile>),
+    ("rect", input::fields_of::<RectFile>),
+    ("sphere", input::fields_of::<SphereFile>),
+];
+
+impl ShapeFile {
+    pub fn name(&self) -> &'static str {
+        match self {
+            ShapeFile::Box(_) => "box",
+            ShapeFile::Rect(_) => "rect",
+            ShapeFile::Sphere(_) => "sphere",
+        }
+    }
+
+    /// Triangles it will make, before it is built (`shapes::triangle_count`).
+    pub fn triangle_count(&self) -> Option<u64> {
+        let subdivisions = match self {
+            ShapeFile::Sphere(s) => s.subdivisions,
+            _ => None,
+        };
+        shapes::triangle_count(self.name(), subdivisions)
+    }
+}
+
+/// The keys of an object whatever its triangles come from.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectFile {
+    pub material: Option<String>,
     pub scale: Option<ScaleFile>,
     pub rotate_deg: Option<[f64; 3]>,
     pub translate: Option<[f64; 3]>,
@@ -83,6 +151,53 @@ pub struct ObjectFile {
     pub instances: Option<Vec<InstanceFile>>,
     /// A regular grid of copies in the world x–y plane.
     pub grid: Option<GridFile>,
+}
+
+/// Reads `[[objects]]` entry `path` (`objects[i]`): `shape` or `file` says what it is;
+/// keys of another shape are reported as not applying to this one (or to a mesh file).
+pub fn object(value: toml::Value, origin: &str, path: &str) -> Result<ObjectEntry> {
+    let at = format!("{origin}: {path}");
+    let toml::Value::Table(mut table) = value else {
+        return Err(Error::input(at, "must be a table"));
+    };
+    let mut string = |key: &str| match table.remove(key) {
+        None => Ok(None),
+        Some(toml::Value::String(s)) => Ok(Some(s)),
+        Some(_) => Err(Error::input(format!("{at}.{key}"), "must be a string")),
+    };
+    let (shape, file) = (string("shape")?, string("file")?);
+    let common = input::fields_of::<ObjectFile>();
+    let (own, rest): (toml::Table, toml::Table) = table
+        .into_iter()
+        .partition(|(k, _)| common.contains(&k.as_str()));
+    let object = input::entry(toml::Value::Table(own), origin, path)?;
+    let others: Vec<&[&str]> = SHAPES.iter().map(|(_, f)| f()).collect();
+    let source = match (shape, file) {
+        (Some(_), Some(_)) => {
+            return Err(Error::input(at, "give either `shape` or `file`, not both"));
+        }
+        (None, None) => return Err(Error::input(at, "needs `shape` or `file`")),
+        (None, Some(file)) => {
+            check_keys(&rest, &[], &others, &at, "a mesh file")?;
+            Source::File(file)
+        }
+        (Some(shape), None) => {
+            let Some((name, fields)) = SHAPES.iter().find(|(n, _)| *n == shape) else {
+                return Err(Error::input(
+                    format!("{at}.shape"),
+                    format!("unknown shape `{shape}` (expected \"box\", \"rect\" or \"sphere\")"),
+                ));
+            };
+            check_keys(&rest, fields(), &others, &at, &format!("shape \"{name}\""))?;
+            let rest = toml::Value::Table(rest);
+            Source::Shape(match *name {
+                "box" => ShapeFile::Box(input::entry(rest, origin, path)?),
+                "rect" => ShapeFile::Rect(input::entry(rest, origin, path)?),
+                _ => ShapeFile::Sphere(input::entry(rest, origin, path)?),
+            })
+        }
+    };
+    Ok(ObjectEntry { source, object })
 }
 
 /// One entry of `instances = [...]`: scale → rotate → translate, after the object's own.
@@ -103,31 +218,6 @@ pub struct GridFile {
     pub spacing: [f64; 2],
 }
 
-/// One `[[lights]]` entry; `type` selects which fields are required.
-#[derive(Deserialize, Debug)]
-#[serde(deny_unknown_fields)]
-pub struct LightFile {
-    #[serde(rename = "type")]
-    pub kind: String,
-    pub position: Option<[f64; 3]>,
-    pub direction: Option<[f64; 3]>,
-    pub intensity_cd: Option<f64>,
-    pub flux_lm: Option<f64>,
-    pub cone_deg: Option<f64>,
-    pub falloff_deg: Option<f64>,
-    pub illuminance_lx: Option<f64>,
-    pub corner: Option<[f64; 3]>,
-    pub u: Option<[f64; 3]>,
-    pub v: Option<[f64; 3]>,
-    pub luminance_cdm2: Option<f64>,
-    /// Luminaires: the photometric file, where (one or many), how turned, how scaled.
-    pub file: Option<String>,
-    pub positions: Option<Vec<[f64; 3]>>,
-    pub aim: Option<[f64; 3]>,
-    pub rotate_deg: Option<f64>,
-    pub multiplier: Option<f64>,
-}
-
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct ReceiverFile {
@@ -136,10 +226,18 @@ pub struct ReceiverFile {
     pub u: [f64; 3],
     pub v: [f64; 3],
     pub cells: [u32; 2],
-    pub quantity: Option<String>,
+    pub quantity: Option<QuantityName>,
     pub view_direction: Option<[f64; 3]>,
     pub half_angle_deg: Option<f64>,
-    pub estimator: Option<String>,
+    pub estimator: Option<Estimator>,
+}
+
+/// `quantity = "illuminance" | "luminance"`; a luminance meter's keys come with it.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum QuantityName {
+    Illuminance,
+    Luminance,
 }
 
 /// The `[camera]` table: the eye of `luxtally render`.
@@ -157,10 +255,7 @@ pub struct CameraFile {
     pub max_depth: Option<u32>,
 }
 
-/// Collapses a possibly multi-line message into one line.
-pub fn one_line(text: &str) -> String {
-    text.split_whitespace().collect::<Vec<_>>().join(" ")
-}
+pub use crate::input::{entry, one_line};
 
 /// Parses the TOML text, rejects non-finite numbers, and deserialises the top level.
 pub fn parse(text: &str, origin: &str) -> Result<SceneFile> {
@@ -218,29 +313,4 @@ fn check_finite(value: &toml::Value, path: &mut String, origin: &str) -> Result<
         }
         _ => Ok(()),
     }
-}
-
-/// Deserialises one entry at key path `path`; serde's message names the field, and toml
-/// records the field's key for type errors, which is appended to the path.
-pub fn entry<T: DeserializeOwned>(value: toml::Value, origin: &str, path: &str) -> Result<T> {
-    value.try_into::<T>().map_err(|e| {
-        // toml's Display ends with "in `key.sub`" when it knows the field.
-        let shown = e.to_string();
-        let key = shown
-            .lines()
-            .filter_map(|l| l.strip_prefix("in `").and_then(|l| l.strip_suffix('`')))
-            .next_back();
-        let full = match (path.is_empty(), key) {
-            (true, None) => String::new(),
-            (true, Some(k)) => k.to_string(),
-            (false, None) => path.to_string(),
-            (false, Some(k)) => format!("{path}.{k}"),
-        };
-        let message = one_line(e.message());
-        if full.is_empty() {
-            Error::input(origin, message)
-        } else {
-            Error::input(format!("{origin}: {full}"), message)
-        }
-    })
 }

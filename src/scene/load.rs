@@ -6,20 +6,21 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::file::{
-    self, CameraFile, InstanceFile, LightFile, MaterialFile, ObjectFile, ReceiverFile, ScaleFile,
+    self, CameraFile, InstanceFile, MaterialFile, ObjectEntry, ObjectFile, QuantityName,
+    ReceiverFile, ScaleFile, ShapeFile, Source,
 };
 use super::mesh_io;
 use super::shapes::{self, Mesh, Transform};
 use super::{
-    Camera, Estimator, Geometry, Light, LightKind, Luminaire, Material, Placement, PrototypeMesh,
-    Quantity, Receiver, Scene, Simulation,
+    Camera, Estimator, Geometry, Light, Material, Placement, PrototypeMesh, Quantity, Receiver,
+    Scene, Simulation,
 };
 use crate::criteria::{self, StopCriteria};
 use crate::error::{Error, Result};
-use crate::photometry::Photometry;
+use crate::input::{direction, required, vec3};
+use crate::light::{self, LoadContext};
 use glam::{DAffine3, DMat3, DVec3};
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 /// Loads and validates the scene file at `path`; relative mesh paths resolve against its
 /// directory.
@@ -36,7 +37,6 @@ pub fn load(path: &Path) -> Result<Scene> {
 pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
     let raw = file::parse(text, origin)?;
     let at = |key: &str| format!("{origin}: {key}");
-
     let name = match raw.name {
         Some(n) if n.trim().is_empty() => return Err(Error::input(at("name"), "empty name")),
         Some(n) => n,
@@ -44,74 +44,19 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
             .file_stem()
             .map_or_else(|| "scene".to_string(), |s| s.to_string_lossy().into_owned()),
     };
-
-    let mut materials = Vec::new();
-    for (key, value) in raw.materials {
-        let path = format!("materials.{key}");
-        let m: MaterialFile = file::entry(value, origin, &path)?;
-        if m.roughness.is_none() && m.glossy_reflectance + m.glossy_transmittance > 0.0 {
-            return Err(Error::input(
-                format!("{}.roughness", at(&path)),
-                "required with glossy_reflectance or glossy_transmittance",
-            ));
-        }
-        let material = Material {
-            name: key,
-            reflectance: m.reflectance,
-            transmittance: m.transmittance,
-            specular_reflectance: m.specular_reflectance,
-            specular_transmittance: m.specular_transmittance,
-            ior: m.ior,
-            glossy_reflectance: m.glossy_reflectance,
-            glossy_transmittance: m.glossy_transmittance,
-            roughness: m.roughness.unwrap_or(1.0),
-        };
-        validate_material(&material, &at(&path))?;
-        materials.push(material);
-    }
-
+    let mut materials = raw
+        .materials
+        .into_iter()
+        .map(|(key, m)| material(key, m, origin))
+        .collect::<Result<Vec<_>>>()?;
     let mut builder = GeometryBuilder::default();
     for (i, value) in raw.objects.into_iter().enumerate() {
-        let path = format!("objects[{i}]");
-        let object: ObjectFile = file::entry(value, origin, &path)?;
-        load_object(&object, i, origin, base_dir, &mut materials, &mut builder)?;
+        let entry = file::object(value, origin, &format!("objects[{i}]"))?;
+        load_object(&entry, i, origin, base_dir, &mut materials, &mut builder)?;
     }
     let geometry = builder.finish(origin)?;
-
-    let mut lights = Vec::new();
-    let mut photometry = PhotometryCache::default();
-    for (i, value) in raw.lights.into_iter().enumerate() {
-        let path = format!("lights[{i}]");
-        let light: LightFile = file::entry(value, origin, &path)?;
-        if light.kind == "luminaire" {
-            lights.extend(luminaires(
-                &light,
-                &path,
-                &at(&path),
-                base_dir,
-                &mut photometry,
-            )?);
-        } else {
-            lights.push(Light {
-                kind: light_kind(&light, &at(&path))?,
-                label: path,
-            });
-        }
-    }
-
-    let mut receivers: Vec<Receiver> = Vec::new();
-    for (i, value) in raw.receivers.into_iter().enumerate() {
-        let path = format!("receivers[{i}]");
-        let r: ReceiverFile = file::entry(value, origin, &path)?;
-        let receiver = receiver(r, &at(&path))?;
-        if receivers.iter().any(|o| o.name == receiver.name) {
-            return Err(Error::input(
-                at(&format!("{path}.name")),
-                format!("duplicate receiver name `{}`", receiver.name),
-            ));
-        }
-        receivers.push(receiver);
-    }
+    let lights = lights(raw.lights, origin, base_dir)?;
+    let receivers = receivers(raw.receivers, origin)?;
 
     let simulation = match raw.simulation {
         Some(value) => simulation(value, origin)?,
@@ -120,15 +65,10 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
             ..Simulation::default()
         },
     };
-
     let camera = match raw.camera {
-        Some(value) => Some(camera(
-            file::entry(value, origin, "camera")?,
-            &at("camera"),
-        )?),
+        Some(c) => Some(camera(c, &at("camera"))?),
         None => None,
     };
-
     Ok(Scene {
         name,
         path: PathBuf::from(origin),
@@ -139,6 +79,60 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         simulation,
         camera,
     })
+}
+
+/// `[materials.KEY]`, validated.
+fn material(key: String, m: MaterialFile, origin: &str) -> Result<Material> {
+    let at = format!("{origin}: materials.{key}");
+    if m.roughness.is_none() && m.glossy_reflectance + m.glossy_transmittance > 0.0 {
+        return Err(Error::input(
+            format!("{at}.roughness"),
+            "required with glossy_reflectance or glossy_transmittance",
+        ));
+    }
+    let material = Material {
+        name: key,
+        reflectance: m.reflectance,
+        transmittance: m.transmittance,
+        specular_reflectance: m.specular_reflectance,
+        specular_transmittance: m.specular_transmittance,
+        ior: m.ior,
+        glossy_reflectance: m.glossy_reflectance,
+        glossy_transmittance: m.glossy_transmittance,
+        roughness: m.roughness.unwrap_or(1.0),
+    };
+    validate_material(&material, &at)?;
+    Ok(material)
+}
+
+/// The `[[lights]]` entries, each read by its kind (`crate::light`).
+fn lights(entries: Vec<toml::Value>, origin: &str, base_dir: &Path) -> Result<Vec<Light>> {
+    let mut lights = Vec::new();
+    let mut cx = LoadContext::new(base_dir);
+    for (i, value) in entries.into_iter().enumerate() {
+        let label = format!("lights[{i}]");
+        for (label, kind) in light::load_entry(value, &label, origin, &mut cx)? {
+            lights.push(Light { label, kind });
+        }
+    }
+    Ok(lights)
+}
+
+/// The `[[receivers]]` entries, validated; names are unique.
+fn receivers(entries: Vec<ReceiverFile>, origin: &str) -> Result<Vec<Receiver>> {
+    let mut receivers: Vec<Receiver> = Vec::new();
+    for (i, r) in entries.into_iter().enumerate() {
+        let at = format!("{origin}: receivers[{i}]");
+        let receiver = receiver(r, &at)?;
+        if receivers.iter().any(|o| o.name == receiver.name) {
+            return Err(Error::input(
+                format!("{at}.name"),
+                format!("duplicate receiver name `{}`", receiver.name),
+            ));
+        }
+        receivers.push(receiver);
+    }
+    Ok(receivers)
 }
 
 /// Every fraction finite and ≥ 0, `ior` ≥ 1, roughness in (0, 1], and no energy
@@ -272,34 +266,6 @@ impl GeometryBuilder {
     }
 }
 
-fn vec3(a: [f64; 3]) -> DVec3 {
-    DVec3::from_array(a)
-}
-
-fn required<T: Copy>(x: Option<T>, at: &str, key: &str, what: &str) -> Result<T> {
-    x.ok_or_else(|| {
-        Error::input(
-            format!("{at}.{key}"),
-            format!("missing (required for {what})"),
-        )
-    })
-}
-
-/// Rejects keys that belong to another shape or light type, so a typo'd shape is loud.
-/// Errs on the first key of `present` that is set but not `allowed` for `what`.
-fn forbid(present: &[(&str, bool)], allowed: &[&str], at: &str, what: &str) -> Result<()> {
-    match present
-        .iter()
-        .find(|(key, set)| *set && !allowed.contains(key))
-    {
-        Some((key, _)) => Err(Error::input(
-            format!("{at}.{key}"),
-            format!("does not apply to {what}"),
-        )),
-        None => Ok(()),
-    }
-}
-
 fn material_index(materials: &[Material], name: &str) -> Option<u32> {
     materials
         .iter()
@@ -307,14 +273,22 @@ fn material_index(materials: &[Material], name: &str) -> Option<u32> {
         .map(|i| i as u32)
 }
 
+/// An object's meshes with scene materials, and where each goes in the object's frame
+/// (prototype index, placement).
+type Prototypes = (Vec<PrototypeMesh>, Vec<(u32, DAffine3)>);
+
+/// One `[[objects]]` entry into the builder: its prototypes (a built-in shape, or a mesh
+/// file's meshes) placed by its own transform and copies, flattened into the map or
+/// kept as instances (`map = false`).
 fn load_object(
-    o: &ObjectFile,
+    entry: &ObjectEntry,
     i: usize,
     origin: &str,
     base_dir: &Path,
     materials: &mut Vec<Material>,
     builder: &mut GeometryBuilder,
 ) -> Result<()> {
+    let o = &entry.object;
     let at = format!("{origin}: objects[{i}]");
     let override_material = match &o.material {
         Some(name) => Some(material_index(materials, name).ok_or_else(|| {
@@ -328,100 +302,183 @@ fn load_object(
     let transform = transform(o, &at)?;
     let copies = copies(o, &at)?;
     let mapped = o.map.unwrap_or(o.instances.is_none() && o.grid.is_none());
-    let object = i as u32;
-
-    // (prototypes with scene materials, placements in the object's frame)
-    let (prototypes, placements): (Vec<PrototypeMesh>, Vec<(u32, DAffine3)>) =
-        match (&o.shape, &o.file) {
-            (Some(_), Some(_)) => {
-                return Err(Error::input(&at, "give either `shape` or `file`, not both"));
-            }
-            (None, None) => return Err(Error::input(&at, "needs `shape` or `file`")),
-            (Some(shape), None) => {
-                let material = override_material.ok_or_else(|| {
-                    Error::input(
-                        format!("{at}.material"),
-                        format!("missing (required for shape \"{shape}\")"),
-                    )
-                })?;
-                let mesh = builtin_shape(o, shape, &at)?;
-                let proto = PrototypeMesh {
-                    material: vec![material; mesh.triangles.len()],
-                    vertices: mesh.vertices,
-                    triangles: mesh.triangles,
-                };
-                (vec![proto], vec![(0, DAffine3::IDENTITY)])
-            }
-            (None, Some(file)) => {
-                forbid(&shape_keys(o), &[], &at, "a mesh file")?;
-                let mesh_path = base_dir.join(file);
-                let parts = mesh_io::load_mesh_parts(&mesh_path, &format!("{at}.file"))?;
-                let per_file = parts.flattened_triangle_count();
+    let object = Placed {
+        object: i as u32,
+        transform,
+        copies,
+        at,
+    };
+    let (prototypes, placements) = match &entry.source {
+        Source::Shape(shape) => shape_prototype(shape, override_material, &object.at)?,
+        Source::File(file) => {
+            let check = |per_file: u64| {
                 if mapped {
-                    builder.check_mapped(per_file.saturating_mul(copies.len() as u64), &at)?;
+                    let total = per_file.saturating_mul(object.copies.len() as u64);
+                    builder.check_mapped(total, &object.at)
+                } else {
+                    Ok(())
                 }
-                let mut protos = Vec::with_capacity(parts.prototypes.len());
-                for (mesh, tri_material) in parts.prototypes {
-                    let material = match override_material {
-                        Some(m) => vec![m; mesh.triangles.len()],
-                        None => file_materials(
-                            &parts.materials,
-                            &tri_material,
-                            parts.missing_reason.as_deref(),
-                            file,
-                            &at,
-                            materials,
-                        )?,
-                    };
-                    protos.push(PrototypeMesh {
-                        vertices: mesh.vertices,
-                        triangles: mesh.triangles,
-                        material,
-                    });
-                }
-                let placements = parts
-                    .placements
-                    .iter()
-                    .map(|(p, m)| (*p, DAffine3::from_mat4(*m)))
-                    .collect();
-                (protos, placements)
-            }
-        };
+            };
+            let found = (override_material, base_dir);
+            file_prototypes(file, found, &object.at, materials, check)?
+        }
+    };
+    if mapped {
+        object.add_mapped(builder, prototypes, &placements)
+    } else {
+        object.add_instances(builder, prototypes, &placements)
+    }
+}
 
-    let copies_total = (copies.len() as u64).saturating_mul(placements.len() as u64);
-    if !mapped {
-        builder.check_instances(copies_total, &at)?;
-        let object_tf = transform.affine();
+/// A built-in shape in the object's material, as one prototype placed once.
+fn shape_prototype(shape: &ShapeFile, material: Option<u32>, at: &str) -> Result<Prototypes> {
+    let material = material.ok_or_else(|| {
+        Error::input(
+            format!("{at}.material"),
+            format!("missing (required for shape \"{}\")", shape.name()),
+        )
+    })?;
+    let mesh = builtin_shape(shape, at)?;
+    let proto = PrototypeMesh {
+        material: vec![material; mesh.triangles.len()],
+        vertices: mesh.vertices,
+        triangles: mesh.triangles,
+    };
+    Ok((vec![proto], vec![(0, DAffine3::IDENTITY)]))
+}
+
+/// A mesh file's prototypes and placements, in the object's material (`found.0`) or the
+/// file's own; `check` sees the triangle count of one flattened copy before materials
+/// are assigned. `found.1`: the scene file's directory.
+fn file_prototypes(
+    file: &str,
+    found: (Option<u32>, &Path),
+    at: &str,
+    materials: &mut Vec<Material>,
+    check: impl FnOnce(u64) -> Result<()>,
+) -> Result<Prototypes> {
+    let (override_material, base_dir) = found;
+    let mesh_path = base_dir.join(file);
+    let parts = mesh_io::load_mesh_parts(&mesh_path, &format!("{at}.file"))?;
+    check(parts.flattened_triangle_count())?;
+    let mut protos = Vec::with_capacity(parts.prototypes.len());
+    for (mesh, tri_material) in parts.prototypes {
+        let material = match override_material {
+            Some(m) => vec![m; mesh.triangles.len()],
+            None => file_materials(
+                &parts.materials,
+                &tri_material,
+                parts.missing_reason.as_deref(),
+                file,
+                at,
+                materials,
+            )?,
+        };
+        protos.push(PrototypeMesh {
+            vertices: mesh.vertices,
+            triangles: mesh.triangles,
+            material,
+        });
+    }
+    let placements = parts
+        .placements
+        .iter()
+        .map(|(p, m)| (*p, DAffine3::from_mat4(*m)))
+        .collect();
+    Ok((protos, placements))
+}
+
+/// How an object is placed: its index, own transform and copies; `at` names it.
+struct Placed {
+    object: u32,
+    transform: Transform,
+    copies: Vec<DAffine3>,
+    at: String,
+}
+
+impl Placed {
+    /// Unmapped: the prototypes stored once, an instance per copy and placement.
+    fn add_instances(
+        &self,
+        builder: &mut GeometryBuilder,
+        prototypes: Vec<PrototypeMesh>,
+        placements: &[(u32, DAffine3)],
+    ) -> Result<()> {
+        let at = &self.at;
+        let copies_total = (self.copies.len() as u64).saturating_mul(placements.len() as u64);
+        builder.check_instances(copies_total, at)?;
+        let object_tf = self.transform.affine();
         let base = builder.prototypes.len() as u32;
         builder.prototypes.extend(prototypes);
-        for copy in &copies {
-            for (proto, node) in &placements {
+        for copy in &self.copies {
+            for (proto, node) in placements {
                 let world = *copy * object_tf * *node;
                 if !world.is_finite() || world.matrix3.determinant() == 0.0 {
                     return Err(Error::input(
-                        &at,
+                        at,
                         "an instance transform is not finite or not invertible",
                     ));
                 }
                 builder.placements.push(Placement {
                     prototype: base + proto,
-                    object,
+                    object: self.object,
                     world,
                 });
             }
         }
-        return Ok(());
+        Ok(())
     }
 
-    // Mapped: flattened in f64, as every object was before instancing.
-    let per_copy: u64 = placements
-        .iter()
-        .map(|(p, _)| prototypes[*p as usize].triangles.len() as u64)
-        .sum();
-    builder.check_mapped(per_copy.saturating_mul(copies.len() as u64), &at)?;
+    /// Mapped: flattened in f64, as every object was before instancing.
+    fn add_mapped(
+        &self,
+        builder: &mut GeometryBuilder,
+        prototypes: Vec<PrototypeMesh>,
+        placements: &[(u32, DAffine3)],
+    ) -> Result<()> {
+        let at = &self.at;
+        let per_copy: u64 = placements
+            .iter()
+            .map(|(p, _)| prototypes[*p as usize].triangles.len() as u64)
+            .sum();
+        builder.check_mapped(per_copy.saturating_mul(self.copies.len() as u64), at)?;
+        let (mut mesh, per_tri) = flatten(&prototypes, placements);
+        if let Some(bad) = mesh.vertices.iter().find(|v| !v.is_finite()) {
+            return Err(Error::input(
+                format!("{at}.file"),
+                format!("vertex {bad} is not finite"),
+            ));
+        }
+        self.transform.apply(&mut mesh.vertices);
+        if self.copies.len() == 1 && self.copies[0] == DAffine3::IDENTITY {
+            return builder.add(mesh, &per_tri, self.object, at);
+        }
+        for copy in &self.copies {
+            let mirrored = copy.matrix3.determinant() < 0.0;
+            let placed = Mesh {
+                vertices: mesh
+                    .vertices
+                    .iter()
+                    .map(|p| copy.transform_point3(*p))
+                    .collect(),
+                triangles: mesh
+                    .triangles
+                    .iter()
+                    .map(|t| if mirrored { [t[0], t[2], t[1]] } else { *t })
+                    .collect(),
+            };
+            builder.add(placed, &per_tri, self.object, at)?;
+        }
+        Ok(())
+    }
+}
+
+/// The prototypes at their placements as one mesh in the object's frame, with each
+/// triangle's material; a mirroring placement reverses its triangles' winding.
+fn flatten(prototypes: &[PrototypeMesh], placements: &[(u32, DAffine3)]) -> (Mesh, Vec<u32>) {
     let mut mesh = Mesh::default();
     let mut per_tri = Vec::new();
-    for (proto, node) in &placements {
+    for (proto, node) in placements {
         let pm = &prototypes[*proto as usize];
         let base = mesh.vertices.len() as u32;
         let identity = *node == DAffine3::IDENTITY;
@@ -442,33 +499,7 @@ fn load_object(
         }));
         per_tri.extend_from_slice(&pm.material);
     }
-    if let Some(bad) = mesh.vertices.iter().find(|v| !v.is_finite()) {
-        return Err(Error::input(
-            format!("{at}.file"),
-            format!("vertex {bad} is not finite"),
-        ));
-    }
-    transform.apply(&mut mesh.vertices);
-    if copies.len() == 1 && copies[0] == DAffine3::IDENTITY {
-        return builder.add(mesh, &per_tri, object, &at);
-    }
-    for copy in &copies {
-        let mirrored = copy.matrix3.determinant() < 0.0;
-        let placed = Mesh {
-            vertices: mesh
-                .vertices
-                .iter()
-                .map(|p| copy.transform_point3(*p))
-                .collect(),
-            triangles: mesh
-                .triangles
-                .iter()
-                .map(|t| if mirrored { [t[0], t[2], t[1]] } else { *t })
-                .collect(),
-        };
-        builder.add(placed, &per_tri, object, &at)?;
-    }
-    Ok(())
+    (mesh, per_tri)
 }
 
 /// The copies of an object (applied after its own transform): each `instances` entry
@@ -597,26 +628,11 @@ fn transform(o: &ObjectFile, at: &str) -> Result<Transform> {
     })
 }
 
-/// The keys of the built-in shapes, and whether an object sets each.
-fn shape_keys(o: &ObjectFile) -> [(&'static str, bool); 8] {
-    [
-        ("min", o.min.is_some()),
-        ("max", o.max.is_some()),
-        ("corner", o.corner.is_some()),
-        ("u", o.u.is_some()),
-        ("v", o.v.is_some()),
-        ("center", o.center.is_some()),
-        ("radius", o.radius.is_some()),
-        ("subdivisions", o.subdivisions.is_some()),
-    ]
-}
-
-fn builtin_shape(o: &ObjectFile, shape: &str, at: &str) -> Result<Mesh> {
-    let what = format!("shape \"{shape}\"");
-    let keys = |allowed: &[&str]| forbid(&shape_keys(o), allowed, at, &what);
+/// A built-in shape's mesh, its keys validated.
+fn builtin_shape(shape: &ShapeFile, at: &str) -> Result<Mesh> {
+    let what = format!("shape \"{}\"", shape.name());
     match shape {
-        "box" => {
-            keys(&["min", "max"])?;
+        ShapeFile::Box(o) => {
             let min = vec3(required(o.min, at, "min", &what)?);
             let max = vec3(required(o.max, at, "max", &what)?);
             if !min.cmplt(max).all() {
@@ -627,8 +643,7 @@ fn builtin_shape(o: &ObjectFile, shape: &str, at: &str) -> Result<Mesh> {
             }
             Ok(shapes::make_box(min, max))
         }
-        "rect" => {
-            keys(&["corner", "u", "v"])?;
+        ShapeFile::Rect(o) => {
             let corner = vec3(required(o.corner, at, "corner", &what)?);
             let u = vec3(required(o.u, at, "u", &what)?);
             let v = vec3(required(o.v, at, "v", &what)?);
@@ -637,8 +652,7 @@ fn builtin_shape(o: &ObjectFile, shape: &str, at: &str) -> Result<Mesh> {
             }
             Ok(shapes::make_rect(corner, u, v))
         }
-        "sphere" => {
-            keys(&["center", "radius", "subdivisions"])?;
+        ShapeFile::Sphere(o) => {
             let center = vec3(required(o.center, at, "center", &what)?);
             let radius = required(o.radius, at, "radius", &what)?;
             if !(radius > 0.0) {
@@ -661,227 +675,7 @@ fn builtin_shape(o: &ObjectFile, shape: &str, at: &str) -> Result<Mesh> {
             }
             Ok(shapes::make_sphere(center, radius, subdivisions))
         }
-        other => Err(Error::input(
-            format!("{at}.shape"),
-            format!("unknown shape `{other}` (expected \"box\", \"rect\" or \"sphere\")"),
-        )),
     }
-}
-
-/// A direction the user wrote: normalised, zero rejected.
-fn direction(d: [f64; 3], at: &str, key: &str) -> Result<DVec3> {
-    vec3(d)
-        .try_normalize()
-        .ok_or_else(|| Error::input(format!("{at}.{key}"), "zero direction"))
-}
-
-/// A photometric amount: finite and ≥ 0 (zero is allowed: a switched-off source).
-fn amount(x: f64, at: &str, key: &str) -> Result<f64> {
-    if x.is_finite() && x >= 0.0 {
-        Ok(x)
-    } else {
-        Err(Error::input(
-            format!("{at}.{key}"),
-            format!("must be ≥ 0, got {x}"),
-        ))
-    }
-}
-
-/// The keys of every light type, and whether a `[[lights]]` entry sets each.
-fn light_keys(l: &LightFile) -> [(&'static str, bool); 16] {
-    [
-        ("position", l.position.is_some()),
-        ("direction", l.direction.is_some()),
-        ("intensity_cd", l.intensity_cd.is_some()),
-        ("flux_lm", l.flux_lm.is_some()),
-        ("cone_deg", l.cone_deg.is_some()),
-        ("falloff_deg", l.falloff_deg.is_some()),
-        ("illuminance_lx", l.illuminance_lx.is_some()),
-        ("corner", l.corner.is_some()),
-        ("u", l.u.is_some()),
-        ("v", l.v.is_some()),
-        ("luminance_cdm2", l.luminance_cdm2.is_some()),
-        ("file", l.file.is_some()),
-        ("positions", l.positions.is_some()),
-        ("aim", l.aim.is_some()),
-        ("rotate_deg", l.rotate_deg.is_some()),
-        ("multiplier", l.multiplier.is_some()),
-    ]
-}
-
-fn light_kind(l: &LightFile, at: &str) -> Result<LightKind> {
-    let what = format!("type \"{}\" lights", l.kind);
-    let light_keys = light_keys(l);
-    let set = |allowed: &[&str]| forbid(&light_keys, allowed, at, &what);
-    match l.kind.as_str() {
-        "point" => {
-            set(&["position", "intensity_cd", "flux_lm"])?;
-            let position = vec3(required(l.position, at, "position", &what)?);
-            let intensity_cd = match (l.intensity_cd, l.flux_lm) {
-                (Some(i), None) => amount(i, at, "intensity_cd")?,
-                // Isotropic: Φ = 4π I.
-                (None, Some(f)) => amount(f, at, "flux_lm")? / (4.0 * std::f64::consts::PI),
-                _ => return Err(Error::input(at, "give exactly one of `intensity_cd` and `flux_lm`")),
-            };
-            Ok(LightKind::Point {
-                position,
-                intensity_cd,
-            })
-        }
-        "spot" => {
-            set(&["position", "direction", "intensity_cd", "cone_deg", "falloff_deg"])?;
-            let position = vec3(required(l.position, at, "position", &what)?);
-            let direction = direction(required(l.direction, at, "direction", &what)?, at, "direction")?;
-            let intensity_cd = amount(required(l.intensity_cd, at, "intensity_cd", &what)?, at, "intensity_cd")?;
-            let cone_deg = required(l.cone_deg, at, "cone_deg", &what)?;
-            if !(cone_deg > 0.0 && cone_deg <= 180.0) {
-                return Err(Error::input(format!("{at}.cone_deg"), format!("must be in (0, 180], got {cone_deg}")));
-            }
-            let falloff_deg = l.falloff_deg.unwrap_or(cone_deg);
-            if !(falloff_deg >= 0.0 && falloff_deg <= cone_deg) {
-                return Err(Error::input(
-                    format!("{at}.falloff_deg"),
-                    format!("must be in [0, cone_deg = {cone_deg}], got {falloff_deg}"),
-                ));
-            }
-            Ok(LightKind::Spot {
-                position,
-                direction,
-                intensity_cd,
-                cone_deg,
-                falloff_deg,
-            })
-        }
-        "directional" => {
-            set(&["direction", "illuminance_lx"])?;
-            let direction = direction(required(l.direction, at, "direction", &what)?, at, "direction")?;
-            let illuminance_lx =
-                amount(required(l.illuminance_lx, at, "illuminance_lx", &what)?, at, "illuminance_lx")?;
-            Ok(LightKind::Directional {
-                direction,
-                illuminance_lx,
-            })
-        }
-        "area" => {
-            set(&["corner", "u", "v", "flux_lm", "luminance_cdm2"])?;
-            let corner = vec3(required(l.corner, at, "corner", &what)?);
-            let u = vec3(required(l.u, at, "u", &what)?);
-            let v = vec3(required(l.v, at, "v", &what)?);
-            let area = u.cross(v).length();
-            if !(area > 0.0) {
-                return Err(Error::input(at, "zero-area light: u × v = 0"));
-            }
-            let luminance_cdm2 = match (l.flux_lm, l.luminance_cdm2) {
-                // One-sided Lambertian emitter: Φ = π L A.
-                (Some(f), None) => amount(f, at, "flux_lm")? / (std::f64::consts::PI * area),
-                (None, Some(lum)) => amount(lum, at, "luminance_cdm2")?,
-                _ => return Err(Error::input(at, "give exactly one of `flux_lm` and `luminance_cdm2`")),
-            };
-            Ok(LightKind::Area {
-                corner,
-                u,
-                v,
-                luminance_cdm2,
-            })
-        }
-        other => Err(Error::input(
-            format!("{at}.type"),
-            format!("unknown light type `{other}` (expected \"point\", \"spot\", \"directional\", \"area\" or \"luminaire\")"),
-        )),
-    }
-}
-
-/// Photometric files loaded so far, by path: luminaires of one file share it.
-#[derive(Default)]
-struct PhotometryCache(Vec<(PathBuf, Arc<Photometry>)>);
-
-impl PhotometryCache {
-    fn load(&mut self, path: &Path) -> Result<Arc<Photometry>> {
-        if let Some((_, p)) = self.0.iter().find(|(q, _)| q == path) {
-            return Ok(p.clone());
-        }
-        let p = Arc::new(crate::photometry::load(path)?);
-        self.0.push((path.to_path_buf(), p.clone()));
-        Ok(p)
-    }
-}
-
-/// A `type = "luminaire"` entry: one light per position (`position`, or each of
-/// `positions`, labelled `lights[i].positions[k]`).
-fn luminaires(
-    l: &LightFile,
-    label: &str,
-    at: &str,
-    base_dir: &Path,
-    cache: &mut PhotometryCache,
-) -> Result<Vec<Light>> {
-    let what = "type \"luminaire\" lights";
-    forbid(
-        &light_keys(l),
-        &[
-            "position",
-            "positions",
-            "file",
-            "aim",
-            "rotate_deg",
-            "multiplier",
-            "flux_lm",
-        ],
-        at,
-        what,
-    )?;
-    let file = required(l.file.as_ref(), at, "file", what)?;
-    let photometry = cache.load(&base_dir.join(file))?;
-    let positions: Vec<(String, DVec3)> = match (&l.position, &l.positions) {
-        (Some(p), None) => vec![(label.to_string(), vec3(*p))],
-        (None, Some(ps)) if !ps.is_empty() => ps
-            .iter()
-            .enumerate()
-            .map(|(k, p)| (format!("{label}.positions[{k}]"), vec3(*p)))
-            .collect(),
-        (None, Some(_)) => return Err(Error::input(format!("{at}.positions"), "is empty")),
-        _ => {
-            return Err(Error::input(
-                at,
-                "give exactly one of `position` and `positions`",
-            ))
-        }
-    };
-    let aim = direction(l.aim.unwrap_or([0.0, 0.0, -1.0]), at, "aim")?;
-    let multiplier = amount(l.multiplier.unwrap_or(1.0), at, "multiplier")?;
-    let file_flux = photometry.flux_lm();
-    let rescale = match l.flux_lm {
-        None => 1.0,
-        Some(f) if file_flux > 0.0 => amount(f, at, "flux_lm")? / file_flux,
-        Some(_) => {
-            return Err(Error::input(
-                format!("{at}.flux_lm"),
-                format!("`{file}` emits no flux: it cannot be rescaled"),
-            ))
-        }
-    };
-    // The table holds the lamp's output at the photometered position (tilt 0); a
-    // luminaire tilted from it (aim away from straight down) gets the file's tilt
-    // factor at that angle relative to it.
-    let tilt = match &photometry.tilt {
-        Some(t) if t.factor(0.0) > 0.0 => {
-            t.factor(aim.dot(-DVec3::Z).clamp(-1.0, 1.0).acos().to_degrees()) / t.factor(0.0)
-        }
-        _ => 1.0,
-    };
-    let frame = Luminaire::frame(aim, l.rotate_deg.unwrap_or(0.0));
-    Ok(positions
-        .into_iter()
-        .map(|(label, position)| Light {
-            label,
-            kind: LightKind::Luminaire(Luminaire {
-                photometry: photometry.clone(),
-                position,
-                frame,
-                scale: multiplier * rescale * tilt,
-            }),
-        })
-        .collect())
 }
 
 fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
@@ -898,8 +692,8 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
             format!("zero cells: {:?} (each must be ≥ 1)", r.cells),
         ));
     }
-    let quantity = match r.quantity.as_deref().unwrap_or("illuminance") {
-        "illuminance" => {
+    let quantity = match r.quantity.unwrap_or(QuantityName::Illuminance) {
+        QuantityName::Illuminance => {
             if r.view_direction.is_some() || r.half_angle_deg.is_some() {
                 let key = if r.view_direction.is_some() {
                     "view_direction"
@@ -913,7 +707,7 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
             }
             Quantity::Illuminance
         }
-        "luminance" => {
+        QuantityName::Luminance => {
             let what = "quantity = \"luminance\"";
             let view_direction = direction(
                 required(r.view_direction, at, "view_direction", what)?,
@@ -932,26 +726,8 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
                 half_angle_deg,
             }
         }
-        other => {
-            return Err(Error::input(
-                format!("{at}.quantity"),
-                format!("unknown quantity `{other}` (expected \"illuminance\" or \"luminance\")"),
-            ))
-        }
     };
-    let estimator = match r.estimator.as_deref().unwrap_or("auto") {
-        "track" => Estimator::Track,
-        "next_event" => Estimator::NextEvent,
-        "auto" => Estimator::Auto,
-        other => {
-            return Err(Error::input(
-                format!("{at}.estimator"),
-                format!(
-                    "unknown estimator `{other}` (expected \"track\", \"next_event\" or \"auto\")"
-                ),
-            ))
-        }
-    };
+    let estimator = r.estimator.unwrap_or(Estimator::Auto);
     Ok(Receiver {
         name: r.name,
         corner,

@@ -5,8 +5,7 @@
 //! `Geometry::origin` maps between the two frames: world = origin + local.
 
 use crate::criteria::StopCriteria;
-use crate::photometry::Photometry;
-use glam::{DAffine3, DMat3, DVec3, Vec3};
+use glam::{DAffine3, DVec3, Vec3};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -16,6 +15,7 @@ mod load;
 pub mod mesh_io;
 pub mod shapes;
 
+pub use crate::light::Luminaire;
 pub use load::{load, load_str};
 
 /// A material: any mix of Lambertian reflection/transmission, ideal specular
@@ -244,76 +244,28 @@ impl Geometry {
     }
 }
 
-/// A light source, world coordinates.
-#[derive(Clone, Debug, PartialEq)]
-pub enum LightKind {
-    /// Isotropic point source.
-    Point { position: DVec3, intensity_cd: f64 },
-    /// Spot: intensity `intensity_cd` on axis up to `falloff_deg` off axis, then a smooth
-    /// (smoothstep in cos θ) fall to zero at `cone_deg`.
-    Spot {
-        position: DVec3,
-        direction: DVec3,
-        intensity_cd: f64,
-        cone_deg: f64,
-        falloff_deg: f64,
-    },
-    /// Parallel source: `illuminance_lx` on a plane normal to `direction` (unit, the way
-    /// the light travels).
-    Directional {
-        direction: DVec3,
-        illuminance_lx: f64,
-    },
-    /// One-sided Lambertian parallelogram emitting on the side of u × v.
-    Area {
-        corner: DVec3,
-        u: DVec3,
-        v: DVec3,
-        luminance_cdm2: f64,
-    },
-    /// A luminaire from a photometric file (docs/photometry.md).
-    Luminaire(Luminaire),
-}
-
-/// A luminaire placed in the scene: its photometry (shared by every luminaire of the
-/// same file), where it is and how it is turned.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Luminaire {
-    pub photometry: Arc<Photometry>,
-    /// World position of the centre of its luminous opening.
-    pub position: DVec3,
-    /// Luminaire frame (x = C0, y = C90, z = up, nadir −z) → world.
-    pub frame: DMat3,
-    /// Factor on the file's intensities: `multiplier`, times the `flux_lm` rescaling,
-    /// times the file's tilt factor at the luminaire's tilt (relative to tilt 0).
-    pub scale: f64,
-}
-
-impl Luminaire {
-    /// The frame that turns the nadir (−z) to `aim` (unit) by the shortest rotation (a
-    /// half turn about x when `aim` is straight up), then turns C0 about `aim` by
-    /// `rotate_deg` (counter-clockwise seen from where the light goes).
-    pub fn frame(aim: DVec3, rotate_deg: f64) -> DMat3 {
-        let nadir = -DVec3::Z;
-        let turn = if aim.dot(nadir) < -1.0 + 1e-12 {
-            DMat3::from_rotation_x(std::f64::consts::PI)
-        } else {
-            DMat3::from_quat(glam::DQuat::from_rotation_arc(nadir, aim))
-        };
-        DMat3::from_axis_angle(-aim, rotate_deg.to_radians()) * turn
-    }
-
-    /// Flux of the luminaire as placed, lm.
-    pub fn flux_lm(&self) -> f64 {
-        self.photometry.flux_lm() * self.scale
-    }
-}
-
-#[derive(Clone, Debug, PartialEq)]
+/// A light of the scene, as `crate::light` validated it (world coordinates).
+#[derive(Clone, Debug)]
 pub struct Light {
     /// `lights[i]` as in the scene file, for messages.
     pub label: String,
-    pub kind: LightKind,
+    /// The source: one of `crate::light`'s kinds, or any other implementation.
+    pub kind: Arc<dyn crate::light::Light>,
+}
+
+impl Light {
+    pub fn new(label: impl Into<String>, kind: impl crate::light::Light) -> Light {
+        Light {
+            label: label.into(),
+            kind: Arc::new(kind),
+        }
+    }
+
+    /// The source as kind `T`, if it is one (`light.get::<light::Point>()`).
+    pub fn get<T: crate::light::Light>(&self) -> Option<&T> {
+        let any: &dyn std::any::Any = self.kind.as_ref();
+        any.downcast_ref::<T>()
+    }
 }
 
 /// What a receiver measures.
@@ -329,8 +281,9 @@ pub enum Quantity {
     },
 }
 
-/// How a receiver is scored.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+/// How a receiver is scored (`estimator = "track" | "next_event" | "auto"`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Estimator {
     /// Analog: a cell scores when a photon crosses it.
     #[default]

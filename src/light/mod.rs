@@ -1,0 +1,279 @@
+//! Light sources: one interface, and one file per kind holding everything about it — its
+//! `[[lights]]` entry (serde), the entry's validation into a light, and its physics
+//! (flux, emission sampling, the light it gives a point, its extent, what the eye sees of
+//! it).
+//!
+//! A source exists at two stages. [`Light`] is the validated source in world coordinates,
+//! as the scene holds it; its `Debug` print is its fingerprint (checkpoints and the eye
+//! pass's indirect-map key hash it), so derive it. [`Emitter`] is the same source
+//! prepared for the photon and eye passes in the scene's local frame (world = origin +
+//! local), with whatever it precomputes.
+//!
+//! Adding a light kind: a file here with its entry struct (implementing [`LightFile`]),
+//! its light ([`Light`]) and emitter ([`Emitter`]), and one line in `registry!`. A light
+//! made by a program rather than read from a file only needs the two traits: push it into
+//! `Scene::lights` (tests/custom_light.rs).
+//!
+//! Emitters are called through `dyn`: one call per photon emitted and per piece of
+//! direct light, each followed by at least one ray cast, which costs far more.
+//!
+//! Layering: below `scene` and `trace`; uses `input`, `photometry`, `sampling`.
+
+use crate::error::{Error, Result};
+use crate::input;
+use crate::photometry::Photometry;
+use glam::DVec3;
+use rand_pcg::Pcg32;
+use serde::de::DeserializeOwned;
+use std::any::Any;
+use std::fmt::Debug;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+pub use area::Area;
+pub use directional::Directional;
+pub use luminaire::Luminaire;
+pub use point::Point;
+pub use spot::{spot_profile, Spot};
+
+/// The kinds of `[[lights]]` entry (their `type`s are the entries' `LightFile::TYPE`):
+/// one line per kind, `module::EntryStruct`, declaring the module too.
+macro_rules! registry {
+    ($($module:ident :: $entry:ident,)*) => {
+        $(pub mod $module;)*
+        const KINDS: &[Kind] = &[$(Kind::of::<$module::$entry>()),*];
+    };
+}
+
+registry! {
+    point::PointFile,
+    spot::SpotFile,
+    directional::DirectionalFile,
+    area::AreaFile,
+    luminaire::LuminaireFile,
+}
+
+/// A validated light source, world coordinates.
+pub trait Light: Debug + Send + Sync + Any {
+    /// Total flux Φ (lm). `sphere` holds the geometry and the receivers: a directional
+    /// source emits through its disk.
+    fn flux_lm(&self, sphere: &BoundingSphere) -> f64;
+
+    /// The source prepared in the local frame (world = `origin` + local).
+    fn emitter(&self, origin: DVec3, sphere: &BoundingSphere) -> Arc<dyn Emitter>;
+
+    /// Shadow rays the eye pass casts towards it per shading point, for memory estimates:
+    /// 1 unless it is sampled on the camera's n × n `area_light_samples` grid.
+    fn eye_shadow_rays(&self, _area_light_samples: u32) -> f64 {
+        1.0
+    }
+
+    /// What `luxtally info` prints after the label.
+    fn describe(&self) -> String {
+        format!("{self:?}")
+    }
+
+    /// The photometric file it emits by, if any (summary.json lists each once).
+    fn photometry(&self) -> Option<&Arc<Photometry>> {
+        None
+    }
+}
+
+/// A light source prepared for sampling, in the scene's local frame.
+pub trait Emitter: Debug + Send + Sync {
+    /// The origin and unit direction of one photon, drawn from the source's emission
+    /// density (the flux weight is Φ_total / N, shared by every photon).
+    fn sample_emission(&self, rng: &mut Pcg32) -> (DVec3, DVec3);
+
+    /// The light arriving at local point `p` (method.md eqs. 1–2), piece by piece: one
+    /// piece for a point-like or directional source; for a source with an extent one per
+    /// point of `area_pattern` ([0, 1)² coordinates), each an equal share of the source.
+    /// Visibility is the caller's (shadow rays).
+    fn incoming(&self, p: DVec3, area_pattern: &[(f64, f64)], each: &mut dyn FnMut(Incoming));
+
+    /// Centre and diagonal (m) of the emitting extent: diagonal 0 for point-like and
+    /// directional sources (the eye pass then takes one piece instead of a pattern).
+    fn extent(&self) -> (DVec3, f64);
+
+    /// Luminance (cd/m²) the eye sees looking along `dir` from `o`, if the ray meets the
+    /// source's emitting side before `t_hit`. Sources are not scene geometry; only those
+    /// the camera can see answer.
+    fn luminance_seen(&self, _o: DVec3, _dir: DVec3, _t_hit: f64) -> Option<f64> {
+        None
+    }
+}
+
+/// A `[[lights]]` entry of one `type`: its keys (serde, `deny_unknown_fields`) and their
+/// validation.
+pub trait LightFile: DeserializeOwned {
+    /// Its `type` in the scene file.
+    const TYPE: &'static str;
+
+    /// Validates the entry at `at` (`file.toml: lights[i]`, for messages) into its lights,
+    /// each with its label: `label` itself for one light.
+    fn into_lights(self, label: &str, at: &str, cx: &mut LoadContext) -> Result<Vec<Labelled>>;
+}
+
+/// A light with its label (`lights[i]` as in the scene file).
+pub type Labelled = (String, Arc<dyn Light>);
+
+/// The one light of an entry.
+pub fn single(label: &str, light: impl Light) -> Result<Vec<Labelled>> {
+    Ok(vec![(label.to_string(), Arc::new(light))])
+}
+
+/// What entries may need from the loader: the scene file's directory, and the
+/// photometric files loaded so far (luminaires of one file share it).
+pub struct LoadContext<'a> {
+    pub base_dir: &'a Path,
+    photometry: Vec<(PathBuf, Arc<Photometry>)>,
+}
+
+impl<'a> LoadContext<'a> {
+    pub fn new(base_dir: &'a Path) -> Self {
+        LoadContext {
+            base_dir,
+            photometry: Vec::new(),
+        }
+    }
+
+    /// The photometric file at `file` (relative to the scene file), loaded once.
+    pub fn photometry(&mut self, file: &str) -> Result<Arc<Photometry>> {
+        let path = self.base_dir.join(file);
+        if let Some((_, p)) = self.photometry.iter().find(|(q, _)| *q == path) {
+            return Ok(p.clone());
+        }
+        let p = Arc::new(crate::photometry::load(&path)?);
+        self.photometry.push((path, p.clone()));
+        Ok(p)
+    }
+}
+
+/// One kind of the registry.
+struct Kind {
+    name: &'static str,
+    fields: input::Fields,
+    load: fn(toml::Value, &str, &str, &mut LoadContext) -> Result<Vec<Labelled>>,
+}
+
+impl Kind {
+    const fn of<T: LightFile>() -> Kind {
+        Kind {
+            name: T::TYPE,
+            fields: input::fields_of::<T>,
+            load: load_as::<T>,
+        }
+    }
+}
+
+fn load_as<T: LightFile>(
+    value: toml::Value,
+    label: &str,
+    origin: &str,
+    cx: &mut LoadContext,
+) -> Result<Vec<Labelled>> {
+    let entry: T = input::entry(value, origin, label)?;
+    entry.into_lights(label, &format!("{origin}: {label}"), cx)
+}
+
+/// Loads the `[[lights]]` entry `label` (`lights[i]`) of scene file `origin` by its
+/// `type`. Keys of another type are reported as not applying to this one.
+pub fn load_entry(
+    value: toml::Value,
+    label: &str,
+    origin: &str,
+    cx: &mut LoadContext,
+) -> Result<Vec<Labelled>> {
+    let at = format!("{origin}: {label}");
+    let names = || {
+        let quoted: Vec<String> = KINDS.iter().map(|k| format!("\"{}\"", k.name)).collect();
+        match quoted.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+            _ => quoted.join(""),
+        }
+    };
+    let toml::Value::Table(mut table) = value else {
+        return Err(Error::input(at, "must be a table"));
+    };
+    let kind = match table.remove("type") {
+        Some(toml::Value::String(s)) => s,
+        Some(_) => return Err(Error::input(format!("{at}.type"), "must be a string")),
+        None => {
+            return Err(Error::input(
+                format!("{at}.type"),
+                format!("missing (expected {})", names()),
+            ))
+        }
+    };
+    let Some(k) = KINDS.iter().find(|k| k.name == kind) else {
+        return Err(Error::input(
+            format!("{at}.type"),
+            format!("unknown light type `{kind}` (expected {})", names()),
+        ));
+    };
+    let others: Vec<&[&str]> = KINDS.iter().map(|o| (o.fields)()).collect();
+    let what = format!("type \"{kind}\" lights");
+    input::check_keys(&table, (k.fields)(), &others, &at, &what)?;
+    (k.load)(toml::Value::Table(table), label, origin, cx)
+}
+
+/// A sphere holding the scene's geometry and receivers, world coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoundingSphere {
+    pub center: DVec3,
+    pub radius: f64,
+}
+
+/// Light from one source arriving at a point, as one point-like piece of it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Incoming {
+    /// From the point towards the piece: the vector to it, or for a directional source
+    /// the unit direction towards the source.
+    pub to_source: DVec3,
+    /// Distance to the piece; `f64::INFINITY` for a directional source.
+    pub distance: f64,
+    /// Illuminance the piece gives on a plane facing it (lx): I/d² for point and spot
+    /// sources, E⊥ for directional ones, L·Ω/n for one of n solid-angle shares of an
+    /// area source (L·cos θ_s·ΔA/d² for a patch of one, when it is sampled by area).
+    pub normal_lx: f64,
+}
+
+impl Incoming {
+    /// Unit direction from the point towards the piece.
+    #[inline]
+    pub fn direction(&self) -> DVec3 {
+        if self.distance.is_finite() {
+            self.to_source / self.distance
+        } else {
+            self.to_source
+        }
+    }
+}
+
+/// The piece of intensity `intensity_cd` at `q` seen from `p` (inverse square law, eq. 1),
+/// unless it is dark or at `p` itself.
+#[inline]
+pub fn from_point(p: DVec3, q: DVec3, intensity_cd: f64, each: &mut dyn FnMut(Incoming)) {
+    let to_source = q - p;
+    let distance = to_source.length();
+    if intensity_cd > 0.0 && distance > 0.0 {
+        each(Incoming {
+            to_source,
+            distance,
+            normal_lx: intensity_cd / (distance * distance),
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_kind_has_its_own_type_and_no_type_key() {
+        for (i, k) in KINDS.iter().enumerate() {
+            assert!(KINDS[..i].iter().all(|o| o.name != k.name), "{}", k.name);
+            assert!(!(k.fields)().is_empty() && !(k.fields)().contains(&"type"));
+        }
+    }
+}

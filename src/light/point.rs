@@ -1,0 +1,92 @@
+//! Isotropic point source: `type = "point"`, intensity I (cd) in every direction.
+
+use super::{
+    from_point, single, BoundingSphere, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
+};
+use crate::error::{Error, Result};
+use crate::input::{amount, required, vec3};
+use crate::sampling::uniform_sphere;
+use glam::DVec3;
+use rand_pcg::Pcg32;
+use serde::Deserialize;
+use std::f64::consts::PI;
+use std::sync::Arc;
+
+/// The `[[lights]]` entry: `position` and one of `intensity_cd`, `flux_lm`.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct PointFile {
+    pub position: Option<[f64; 3]>,
+    pub intensity_cd: Option<f64>,
+    pub flux_lm: Option<f64>,
+}
+
+impl LightFile for PointFile {
+    const TYPE: &'static str = "point";
+
+    fn into_lights(self, label: &str, at: &str, _: &mut LoadContext) -> Result<Vec<Labelled>> {
+        let what = "type \"point\" lights";
+        let position = vec3(required(self.position, at, "position", what)?);
+        let intensity_cd = match (self.intensity_cd, self.flux_lm) {
+            (Some(i), None) => amount(i, at, "intensity_cd")?,
+            // Isotropic: Φ = 4π I.
+            (None, Some(f)) => amount(f, at, "flux_lm")? / (4.0 * PI),
+            _ => {
+                return Err(Error::input(
+                    at,
+                    "give exactly one of `intensity_cd` and `flux_lm`",
+                ))
+            }
+        };
+        single(
+            label,
+            Point {
+                position,
+                intensity_cd,
+            },
+        )
+    }
+}
+
+/// Isotropic point source (world coordinates).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Point {
+    pub position: DVec3,
+    pub intensity_cd: f64,
+}
+
+impl Light for Point {
+    fn flux_lm(&self, _: &BoundingSphere) -> f64 {
+        4.0 * PI * self.intensity_cd
+    }
+
+    fn emitter(&self, origin: DVec3, _: &BoundingSphere) -> Arc<dyn Emitter> {
+        Arc::new(PointEmitter {
+            position: self.position - origin,
+            intensity_cd: self.intensity_cd,
+        })
+    }
+}
+
+#[derive(Clone, Debug)]
+struct PointEmitter {
+    position: DVec3,
+    intensity_cd: f64,
+}
+
+impl Emitter for PointEmitter {
+    #[inline]
+    fn sample_emission(&self, rng: &mut Pcg32) -> (DVec3, DVec3) {
+        (self.position, uniform_sphere(rng))
+    }
+
+    fn incoming(&self, p: DVec3, _: &[(f64, f64)], each: &mut dyn FnMut(Incoming)) {
+        if self.intensity_cd > 0.0 {
+            from_point(p, self.position, self.intensity_cd, each);
+        }
+    }
+
+    fn extent(&self) -> (DVec3, f64) {
+        (self.position, 0.0)
+    }
+}
