@@ -85,6 +85,8 @@ pub struct Scratch {
     occluded: Vec<bool>,
     /// Diffuse survivors of a bounce, whose directions are sampled in a pass of their own.
     diffuse: Vec<DiffuseSlot>,
+    /// Which segments of the batch cross the receiver being scored.
+    marks: Vec<bool>,
 }
 
 /// A diffuse survivor: its slot in the batch and the hemisphere it scatters into, the
@@ -309,7 +311,7 @@ impl<'a> Tracer<'a> {
         let lanes = &mut s.lanes;
         let t_hit = &hits.t[..n];
         for r in &self.receivers {
-            self.score_crossings(r, rays, t_hit, lanes, flux, &mut s.pending);
+            self.score_crossings(r, rays, t_hit, lanes, flux, &mut s.marks, &mut s.pending);
         }
         let (ox, oy, oz) = (&mut rays.ox[..n], &mut rays.oy[..n], &mut rays.oz[..n]);
         let (dx, dy, dz) = (&mut rays.dx[..n], &mut rays.dy[..n], &mut rays.dz[..n]);
@@ -451,6 +453,7 @@ impl<'a> Tracer<'a> {
     /// luminance. Next-event receivers take by crossing only what they do not connect:
     /// light from specular interactions, and diffuse light from vertices in their near
     /// zone.
+    #[allow(clippy::too_many_arguments)]
     fn score_crossings(
         &self,
         r: &ReceiverGrid,
@@ -458,18 +461,21 @@ impl<'a> Tracer<'a> {
         t_hit: &[f32],
         lanes: &Lanes,
         flux: f64,
+        marks: &mut Vec<bool>,
         pending: &mut Vec<(u32, u32, f64)>,
     ) {
         let n = t_hit.len();
         let (ox, oy, oz) = (&rays.ox[..n], &rays.oy[..n], &rays.oz[..n]);
         let (dx, dy, dz) = (&rays.dx[..n], &rays.dy[..n], &rays.dz[..n]);
+        let slack = self.receiver_slack;
+        r.mark_crossings([ox, oy, oz], [dx, dy, dz], t_hit, slack, marks);
         let (offsets, segments) = (&lanes.offset[..n], &lanes.segment[..n]);
         let next_event = r.next_event();
-        for k in 0..n {
+        for k in marks.iter().enumerate().filter(|m| *m.1).map(|m| m.0) {
             let origin = DVec3::new(ox[k] as f64, oy[k] as f64, oz[k] as f64);
             let dir = DVec3::new(dx[k] as f64, dy[k] as f64, dz[k] as f64);
-            let t_reach = t_hit[k] as f64 + self.receiver_slack;
-            let Some(c) = r.crossing(origin, dir, -self.receiver_slack, t_reach) else {
+            let t_reach = t_hit[k] as f64 + slack;
+            let Some(c) = r.crossing(origin, dir, -slack, t_reach) else {
                 continue;
             };
             let scores = !next_event
