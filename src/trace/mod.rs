@@ -29,7 +29,7 @@ use direct::DirectLight;
 use emit::Emitters;
 use glam::{DVec3, Vec3};
 use rand_pcg::Pcg32;
-use scatter::{offset_origin, scatter};
+use scatter::{offset_origin, offset_origins, scatter};
 
 /// Photons traced together as one batch and tallied as one chunk. Chunks are fixed
 /// ranges of photon indices, which keeps the merge order independent of threads.
@@ -87,6 +87,8 @@ pub struct Scratch {
     diffuse: Vec<DiffuseSlot>,
     /// Which segments of the batch cross the receiver being scored.
     marks: Vec<bool>,
+    /// Per survivor, the normal of the side it leaves its surface on.
+    side: [Vec<f32>; 3],
 }
 
 /// A diffuse survivor: its slot in the batch and the hemisphere it scatters into, the
@@ -325,6 +327,14 @@ impl<'a> Tracer<'a> {
         }
         let diffuse = &mut s.diffuse[..n];
         let mut m = 0;
+        // Survivors leave their hit points along these normals (pass 3).
+        for v in &mut s.side {
+            if v.len() < n {
+                v.resize(n, 0.0);
+            }
+        }
+        let [sx, sy, sz] = &mut s.side;
+        let (sx, sy, sz) = (&mut sx[..n], &mut sy[..n], &mut sz[..n]);
         // Survivors so far: lane k's successor is written at j ≤ k.
         let mut j = 0;
         for k in 0..n {
@@ -371,8 +381,8 @@ impl<'a> Tracer<'a> {
                 // lobe: the same draws, the same numbers. The slot is written whatever
                 // the roulette says and kept only if the photon survives.
                 let survives = uniform(&mut rngs[k]) < surfacing.bsdf.diffuse().0;
-                let o = offset_origin(p, facing, self.scene_scale);
-                (ox[j], oy[j], oz[j]) = (o.x, o.y, o.z);
+                (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
+                (sx[j], sy[j], sz[j]) = (facing.x, facing.y, facing.z);
                 offsets[j] = offset;
                 bounces[j] = hit_bounces + 1;
                 segments[j] = Segment::Diffuse;
@@ -397,13 +407,10 @@ impl<'a> Tracer<'a> {
                 LobeKind::Glossy => surfacing.glossy_connectable,
                 LobeKind::Specular => false,
             };
-            let o = offset_origin(
-                p,
-                if sample.transmitted { -facing } else { facing },
-                self.scene_scale,
-            );
+            let side = if sample.transmitted { -facing } else { facing };
             let d = sample.dir.as_vec3();
-            (ox[j], oy[j], oz[j]) = (o.x, o.y, o.z);
+            (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
+            (sx[j], sy[j], sz[j]) = (side.x, side.y, side.z);
             (dx[j], dy[j], dz[j]) = (d.x, d.y, d.z);
             offsets[j] = offset;
             bounces[j] = hit_bounces + 1;
@@ -415,6 +422,11 @@ impl<'a> Tracer<'a> {
             rngs[j] = rngs[k].clone();
             j += 1;
         }
+        offset_origins(
+            [&mut ox[..j], &mut oy[..j], &mut oz[..j]],
+            [&sx[..j], &sy[..j], &sz[..j]],
+            self.scene_scale,
+        );
         for &DiffuseSlot { slot, flip, normal } in &diffuse[..m] {
             let slot = slot as usize;
             let n_d = normal.as_dvec3();
