@@ -271,18 +271,19 @@ impl<'a> Tracer<'a> {
         lanes.bounces.resize(live, 0);
         lanes.segment.resize(live, Segment::Emitted);
         scratch.pending.clear();
+        // Streams first, then emission: two short loops whose iterations overlap.
         for offset in 0..live as u32 {
-            let index = first + offset as u64;
-            let mut rng = photon_stream(self.seed, index);
-            let (o, d) = self
-                .emitters
-                .sample(self.emitters.light_of(index), &mut rng);
+            lanes.offset.push(offset);
+            lanes
+                .rng
+                .push(photon_stream(self.seed, first + offset as u64));
+        }
+        for (k, rng) in lanes.rng.iter_mut().enumerate() {
+            let index = first + k as u64;
+            let (o, d) = self.emitters.sample(self.emitters.light_of(index), rng);
             let (o, d) = (o.as_vec3(), d.as_vec3());
-            let k = offset as usize;
             (rays.ox[k], rays.oy[k], rays.oz[k]) = (o.x, o.y, o.z);
             (rays.dx[k], rays.dy[k], rays.dz[k]) = (d.x, d.y, d.z);
-            lanes.offset.push(offset);
-            lanes.rng.push(rng);
         }
         // The parity of a photon's index is that of its chunk offset, flipped when the
         // chunk starts at an odd index.
