@@ -470,7 +470,8 @@ pub fn lit_scene(name: &str, mut geometry: Geometry) -> crate::scene::Scene {
 /// Photon-tracing throughput against raw ray casting on the same scene and backend:
 /// closest-hit rays per second of the photon pass (track estimator, so every ray is a
 /// closest-hit ray) over the backend's rays per second on incoherent random rays through
-/// the same API, both wall time on 1 and on `threads` threads. Returns a Markdown table.
+/// the same API, both wall time on 1 and on `threads` threads, and both CPU time of one
+/// thread. Returns a Markdown table.
 /// `progress` is told each measurement as it starts.
 pub fn bench_photons(
     scene: &crate::scene::Scene,
@@ -528,7 +529,51 @@ pub fn bench_photons(
             traced / raw
         );
     }
+    // The same ratio in CPU time on one thread (the caller's): robust to other
+    // processes on a shared machine, which stretch wall times unevenly.
+    progress("raw rays and photons, CPU time of one thread");
+    let raw_cpu = rust_mrays(
+        caster.as_ref(),
+        caster.default_intersect_api(),
+        &chunks,
+        false,
+        None,
+        3,
+    );
+    let (rays, cpu_s) = photon_pass_cpu(scene, caster.as_ref(), photons);
+    let traced_cpu = rays as f64 / cpu_s / 1e6;
+    let _ = writeln!(
+        out,
+        "| 1 (CPU time) | {raw_cpu:.2} | {traced_cpu:.2} | {:.2} M | {:.2} |",
+        photons as f64 / cpu_s / 1e6,
+        traced_cpu / raw_cpu
+    );
     Ok(out)
+}
+
+/// Traces `photons` photons of `scene` (track estimator) chunk by chunk on the calling
+/// thread, folding each chunk into the tallies as a run does: the rays cast and the
+/// thread's CPU seconds.
+fn photon_pass_cpu(
+    scene: &crate::scene::Scene,
+    caster: &dyn RayCaster,
+    photons: u64,
+) -> (u64, f64) {
+    use crate::scene::Estimator;
+    use crate::tally::ChunkTally;
+    use crate::trace::{Scratch, Tracer, CHUNK_PHOTONS};
+    let tracer = Tracer::new(scene, caster, 7, Some(Estimator::Track));
+    let mut tallies = tracer.new_tallies();
+    let (mut scratch, mut chunk) = (Scratch::default(), ChunkTally::default());
+    let start = thread_cpu_seconds();
+    let mut first = 0;
+    while first < photons {
+        let n = CHUNK_PHOTONS.min(photons - first);
+        tracer.trace_chunk_into(first, n as u32, &mut scratch, &mut chunk);
+        tallies.accumulate(&chunk, n);
+        first += n;
+    }
+    (tallies.rays, thread_cpu_seconds() - start)
 }
 
 /// Time to accuracy on a receiver: runs `scene` until `target` relative error (eq. 9,

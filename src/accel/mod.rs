@@ -140,7 +140,7 @@ impl HitBatch {
 
     /// What the tracer needs of hit `k`: point, normal, material and, for mapped
     /// triangles, the triangle id; `None` on a miss.
-    #[inline]
+    #[inline(always)]
     pub fn surface(&self, k: usize, g: &Geometry) -> Option<Surface> {
         let tri = self.tri[k];
         let (u, v) = (self.u[k], self.v[k]);

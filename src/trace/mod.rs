@@ -21,6 +21,7 @@ pub mod scatter;
 
 use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng::photon_stream;
+use crate::sampling::{cosine_hemisphere, uniform};
 use crate::scene::{Estimator, Geometry, Scene};
 use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid, Tallies};
 use bsdf::{Bsdf, LobeKind};
@@ -28,7 +29,7 @@ use direct::DirectLight;
 use emit::Emitters;
 use glam::{DVec3, Vec3};
 use rand_pcg::Pcg32;
-use scatter::{offset_origin, scatter};
+use scatter::{offset_origin, offset_origins, scatter};
 
 /// Photons traced together as one batch and tallied as one chunk. Chunks are fixed
 /// ranges of photon indices, which keeps the merge order independent of threads.
@@ -53,8 +54,8 @@ pub fn bounce_cap(max_albedo: f64) -> u32 {
 pub struct Tracer<'a> {
     caster: &'a dyn RayCaster,
     geometry: &'a Geometry,
-    /// BSDF per material.
-    bsdfs: Vec<Bsdf>,
+    /// BSDF and its bounce flags per material.
+    surfacings: Vec<Surfacing>,
     pub emitters: Emitters,
     pub receivers: Vec<ReceiverGrid>,
     seed: u64,
@@ -69,11 +70,11 @@ pub struct Tracer<'a> {
 /// Per-worker buffers, reused from chunk to chunk (their contents never affect results).
 #[derive(Default)]
 pub struct Scratch {
+    /// The live photons' rays: survivors are compacted in place after every bounce, in
+    /// lane order, so the batch never changes order and nothing is copied twice.
     rays: RayBatch,
-    next_rays: RayBatch,
     hits: HitBatch,
-    lanes: Vec<Lane>,
-    next_lanes: Vec<Lane>,
+    lanes: Lanes,
     /// (photon offset in chunk, cell, score) before folding per history.
     pending: Vec<(u32, u32, f64)>,
     /// Per-cell sums of the chunk's histories while folding.
@@ -82,12 +83,29 @@ pub struct Scratch {
     shadow_rays: RayBatch,
     shadow_scores: Vec<(u32, u32, f64)>,
     occluded: Vec<bool>,
+    /// Diffuse survivors of a bounce, whose directions are sampled in a pass of their own.
+    diffuse: Vec<DiffuseSlot>,
+    /// Which segments of the batch cross the receiver being scored.
+    marks: Vec<bool>,
+    /// Per survivor, the normal of the side it leaves its surface on.
+    side: [Vec<f32>; 3],
+}
+
+/// A diffuse survivor: its slot in the batch and the hemisphere it scatters into, the
+/// hit triangle's normal (f32, as stored) or its opposite.
+#[derive(Clone, Copy, Debug, Default)]
+struct DiffuseSlot {
+    slot: u32,
+    /// Scatter to the side opposite `normal`.
+    flip: bool,
+    normal: Vec3,
 }
 
 /// Where a photon's current segment started.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 enum Segment {
     /// At a light: its light on next-event receivers is the deterministic direct light.
+    #[default]
     Emitted,
     /// At a diffuse or connectable glossy scattering: connected to next-event receivers
     /// beyond their near zone.
@@ -96,17 +114,65 @@ enum Segment {
     Specular,
 }
 
-/// A live photon's state besides its ray.
-#[derive(Clone)]
-struct Lane {
+/// The live photons' state besides their rays, structure of arrays in ray order.
+#[derive(Default)]
+struct Lanes {
     /// Photon index within the chunk.
-    offset: u32,
+    offset: Vec<u32>,
     /// Surface hits so far (the first is direct light, the rest indirect).
-    bounces: u32,
-    odd: bool,
+    bounces: Vec<u32>,
     /// Where the current segment started.
-    segment: Segment,
-    rng: Pcg32,
+    segment: Vec<Segment>,
+    rng: Vec<Pcg32>,
+}
+
+impl Lanes {
+    fn clear(&mut self) {
+        self.offset.clear();
+        self.bounces.clear();
+        self.segment.clear();
+        self.rng.clear();
+    }
+
+    fn truncate(&mut self, n: usize) {
+        self.offset.truncate(n);
+        self.bounces.truncate(n);
+        self.segment.truncate(n);
+        self.rng.truncate(n);
+    }
+}
+
+/// What the photon pass needs of a material, looked up once per hit: the BSDF and the
+/// flags that decide its path through a bounce, so the common case (a grey Lambertian
+/// reflector) skips the general lobe roulette.
+#[derive(Clone, Copy, Debug)]
+struct Surfacing {
+    bsdf: Bsdf,
+    /// Connected to next-event receivers ([`Bsdf::connectable`]).
+    connectable: bool,
+    /// Its glossy lobes are connected ([`Bsdf::glossy_connectable`]).
+    glossy_connectable: bool,
+    /// Diffuse reflection is its only lobe: the roulette is one comparison with ρ
+    /// (the same number [`Bsdf::sample`] draws and compares, so the same path).
+    lambert_only: bool,
+}
+
+impl Surfacing {
+    fn new(bsdf: Bsdf) -> Surfacing {
+        let (_, tau) = bsdf.diffuse();
+        let (mirror, dielectric) = bsdf.specular();
+        let (glossy_r, glossy_t) = bsdf.glossy();
+        Surfacing {
+            bsdf,
+            connectable: bsdf.connectable(),
+            glossy_connectable: bsdf.glossy_connectable(),
+            lambert_only: tau == 0.0
+                && mirror == 0.0
+                && dielectric == 0.0
+                && glossy_r == 0.0
+                && glossy_t == 0.0,
+        }
+    }
 }
 
 impl<'a> Tracer<'a> {
@@ -138,7 +204,11 @@ impl<'a> Tracer<'a> {
         Tracer {
             caster,
             geometry: g,
-            bsdfs: scene.materials.iter().map(Bsdf::new).collect(),
+            surfacings: scene
+                .materials
+                .iter()
+                .map(|m| Surfacing::new(Bsdf::new(m)))
+                .collect(),
             emitters: Emitters::new(scene),
             receivers,
             seed,
@@ -182,34 +252,46 @@ impl<'a> Tracer<'a> {
     ) {
         tally.clear();
         let flux = self.emitters.total_flux_lm;
-        scratch.rays.clear();
-        scratch.lanes.clear();
-        scratch.pending.clear();
-        if flux > 0.0 {
-            for offset in 0..count {
-                let index = first + offset as u64;
-                let mut rng = photon_stream(self.seed, index);
-                let (o, d) = self
-                    .emitters
-                    .sample(self.emitters.light_of(index), &mut rng);
-                scratch
-                    .rays
-                    .push(o.as_vec3().into(), d.as_vec3().into(), 0.0, f32::INFINITY);
-                scratch.lanes.push(Lane {
-                    offset,
-                    bounces: 0,
-                    odd: index % 2 == 1,
-                    segment: Segment::Emitted,
-                    rng,
-                });
-            }
+        let live = if flux > 0.0 { count as usize } else { 0 };
+        // Every photon ray is a closest-hit ray from t = 0 to ∞: `tnear` and `tfar` are
+        // set once here and never change while the batch shrinks.
+        let rays = &mut scratch.rays;
+        for v in [&mut rays.ox, &mut rays.oy, &mut rays.oz] {
+            v.clear();
+            v.resize(live, 0.0);
         }
+        for v in [&mut rays.dx, &mut rays.dy, &mut rays.dz, &mut rays.tnear] {
+            v.clear();
+            v.resize(live, 0.0);
+        }
+        rays.tfar.clear();
+        rays.tfar.resize(live, f32::INFINITY);
+        let lanes = &mut scratch.lanes;
+        lanes.clear();
+        lanes.bounces.resize(live, 0);
+        lanes.segment.resize(live, Segment::Emitted);
+        scratch.pending.clear();
+        // Streams first, then emission: two short loops whose iterations overlap.
+        for offset in 0..live as u32 {
+            lanes.offset.push(offset);
+            lanes
+                .rng
+                .push(photon_stream(self.seed, first + offset as u64));
+        }
+        for (k, rng) in lanes.rng.iter_mut().enumerate() {
+            let index = first + k as u64;
+            let (o, d) = self.emitters.sample(self.emitters.light_of(index), rng);
+            let (o, d) = (o.as_vec3(), d.as_vec3());
+            (rays.ox[k], rays.oy[k], rays.oz[k]) = (o.x, o.y, o.z);
+            (rays.dx[k], rays.dy[k], rays.dz[k]) = (d.x, d.y, d.z);
+        }
+        // The parity of a photon's index is that of its chunk offset, flipped when the
+        // chunk starts at an odd index.
+        let odd_first = first % 2 == 1;
         while !scratch.rays.is_empty() {
             self.caster.intersect(&scratch.rays, &mut scratch.hits);
             tally.rays += scratch.rays.len() as u64;
-            self.step(scratch, tally, flux);
-            std::mem::swap(&mut scratch.rays, &mut scratch.next_rays);
-            std::mem::swap(&mut scratch.lanes, &mut scratch.next_lanes);
+            self.step(scratch, tally, flux, odd_first);
         }
         fold_histories(
             &mut scratch.pending,
@@ -218,97 +300,154 @@ impl<'a> Tracer<'a> {
         );
     }
 
-    /// One bounce of every live photon: score, deposit, connect, scatter, compact.
-    fn step(&self, s: &mut Scratch, tally: &mut ChunkTally, flux: f64) {
-        s.next_rays.clear();
-        s.next_lanes.clear();
+    /// One bounce of every live photon, in three passes over the batch, each a short
+    /// loop the processor overlaps from lane to lane: score the receivers the segments
+    /// cross; then deposit, connect and play the roulette at each hit, compacting the
+    /// survivors in place (lane order kept); then sample the diffuse survivors' new
+    /// directions. Each photon draws its random numbers in the same order as ever.
+    fn step(&self, s: &mut Scratch, tally: &mut ChunkTally, flux: f64, odd_first: bool) {
         s.shadow_rays.clear();
         s.shadow_scores.clear();
-        let (rays, hits) = (&s.rays, &s.hits);
-        for (k, lane) in s.lanes.iter_mut().enumerate() {
-            let origin = DVec3::new(rays.ox[k] as f64, rays.oy[k] as f64, rays.oz[k] as f64);
-            let dir = DVec3::new(rays.dx[k] as f64, rays.dy[k] as f64, rays.dz[k] as f64);
-            // A receiver lying on a surface (within f32 precision) counts the photons
-            // that hit the surface and those that leave it: one placed on a floor
-            // measures the floor's illuminance, or its luminance.
-            let t_reach = hits.t[k] as f64 + self.receiver_slack;
-            for r in &self.receivers {
-                let Some(c) = r.crossing(origin, dir, -self.receiver_slack, t_reach) else {
-                    continue;
-                };
-                // Next-event receivers take by crossing only what they do not connect:
-                // light from specular interactions, and diffuse light from vertices in
-                // their near zone.
-                let scores = !r.next_event()
-                    || match lane.segment {
-                        Segment::Emitted => false,
-                        Segment::Specular => true,
-                        Segment::Diffuse => c.distance < r.near_zone_m,
-                    };
-                if scores {
-                    s.pending.push((lane.offset, c.cell, c.score_per_lm * flux));
-                }
+        let n = s.rays.len();
+        let hits = &s.hits;
+        let rays = &mut s.rays;
+        let lanes = &mut s.lanes;
+        let t_hit = &hits.t[..n];
+        for r in &self.receivers {
+            self.score_crossings(r, rays, t_hit, lanes, flux, &mut s.marks, &mut s.pending);
+        }
+        let (ox, oy, oz) = (&mut rays.ox[..n], &mut rays.oy[..n], &mut rays.oz[..n]);
+        let (dx, dy, dz) = (&mut rays.dx[..n], &mut rays.dy[..n], &mut rays.dz[..n]);
+        let (offsets, bounces) = (&mut lanes.offset[..n], &mut lanes.bounces[..n]);
+        let (segments, rngs) = (&mut lanes.segment[..n], &mut lanes.rng[..n]);
+        let any_next_event = self.receivers.iter().any(|r| r.next_event());
+        // Diffuse survivors whose direction pass 3 samples. Written for every
+        // Lambertian hit and kept by advancing `m`, so the roulette is no branch.
+        if s.diffuse.len() < n {
+            s.diffuse.resize(n, DiffuseSlot::default());
+        }
+        let diffuse = &mut s.diffuse[..n];
+        let mut m = 0;
+        // Survivors leave their hit points along these normals (pass 3).
+        for v in &mut s.side {
+            if v.len() < n {
+                v.resize(n, 0.0);
             }
+        }
+        let [sx, sy, sz] = &mut s.side;
+        let (sx, sy, sz) = (&mut sx[..n], &mut sy[..n], &mut sz[..n]);
+        // Survivors so far: lane k's successor is written at j ≤ k.
+        let mut j = 0;
+        for k in 0..n {
+            let hit_bounces = bounces[k];
             let Some(surface) = hits.surface(k, self.geometry) else {
-                tally.record_history_hits(lane.bounces);
+                tally.record_history_hits(hit_bounces);
                 continue;
             };
+            let dir = DVec3::new(dx[k] as f64, dy[k] as f64, dz[k] as f64);
+            let offset = offsets[k];
             let normal = surface.normal;
-            let back_face = dir.dot(normal.as_dvec3()) > 0.0;
+            let n_d = normal.as_dvec3();
+            let cos_in = dir.dot(n_d);
+            let back_face = cos_in > 0.0;
             // Unmapped (instanced) objects scatter and occlude but hold no tallies.
             if let Some(tri) = surface.mapped {
+                let odd = (offset % 2 == 1) != odd_first;
                 tally
                     .deposits
-                    .push(deposit_code(tri, back_face, lane.bounces > 0, lane.odd));
+                    .push(deposit_code(tri, back_face, hit_bounces > 0, odd));
             }
             let p = surface.point;
             let facing = if back_face { -normal } else { normal };
-            let material = surface.material as usize;
-            let bsdf = &self.bsdfs[material];
-            if bsdf.connectable() {
+            let surfacing = &self.surfacings[surface.material as usize];
+            if any_next_event && surfacing.connectable {
                 self.connect(
                     p,
                     normal,
                     -dir,
-                    bsdf,
-                    lane,
+                    surfacing,
+                    (offset, &mut rngs[k]),
                     flux,
                     &mut s.shadow_rays,
                     &mut s.shadow_scores,
                 );
             }
-            if lane.bounces >= self.max_bounces {
+            if hit_bounces >= self.max_bounces {
                 tally.killed_by_bounce_cap += 1;
-                tally.record_history_hits(lane.bounces + 1);
+                tally.record_history_hits(hit_bounces + 1);
                 continue;
             }
-            let Some(sample) = scatter(bsdf, dir, normal.as_dvec3(), &mut lane.rng) else {
-                tally.record_history_hits(lane.bounces + 1);
+            if surfacing.lambert_only {
+                // `Bsdf::sample`'s roulette and diffuse lobe for a material with no other
+                // lobe: the same draws, the same numbers. The slot is written whatever
+                // the roulette says and kept only if the photon survives.
+                let survives = uniform(&mut rngs[k]) < surfacing.bsdf.diffuse().0;
+                (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
+                (sx[j], sy[j], sz[j]) = (facing.x, facing.y, facing.z);
+                offsets[j] = offset;
+                bounces[j] = hit_bounces + 1;
+                segments[j] = Segment::Diffuse;
+                rngs[j] = rngs[k].clone();
+                diffuse[m] = DiffuseSlot {
+                    slot: j as u32,
+                    flip: !(cos_in < 0.0),
+                    normal,
+                };
+                let (kept, ended) = (survives as usize, !survives as u32);
+                record_history_hits_if(tally, hit_bounces + 1, ended);
+                j += kept;
+                m += kept;
+                continue;
+            }
+            let Some(sample) = scatter(&surfacing.bsdf, dir, n_d, &mut rngs[k]) else {
+                tally.record_history_hits(hit_bounces + 1);
                 continue;
             };
-            let (new_dir, transmitted) = (sample.dir, sample.transmitted);
             let connected = match sample.kind {
                 LobeKind::Diffuse => true,
-                LobeKind::Glossy => bsdf.glossy_connectable(),
+                LobeKind::Glossy => surfacing.glossy_connectable,
                 LobeKind::Specular => false,
             };
-            let o = offset_origin(
-                p,
-                if transmitted { -facing } else { facing },
-                self.scene_scale,
-            );
-            s.next_rays
-                .push(o.into(), new_dir.as_vec3().into(), 0.0, f32::INFINITY);
-            s.next_lanes.push(Lane {
-                bounces: lane.bounces + 1,
-                segment: if connected {
-                    Segment::Diffuse
-                } else {
-                    Segment::Specular
-                },
-                ..lane.clone()
-            });
+            let side = if sample.transmitted { -facing } else { facing };
+            let d = sample.dir.as_vec3();
+            (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
+            (sx[j], sy[j], sz[j]) = (side.x, side.y, side.z);
+            (dx[j], dy[j], dz[j]) = (d.x, d.y, d.z);
+            offsets[j] = offset;
+            bounces[j] = hit_bounces + 1;
+            segments[j] = if connected {
+                Segment::Diffuse
+            } else {
+                Segment::Specular
+            };
+            rngs[j] = rngs[k].clone();
+            j += 1;
         }
+        offset_origins(
+            [&mut ox[..j], &mut oy[..j], &mut oz[..j]],
+            [&sx[..j], &sy[..j], &sz[..j]],
+            self.scene_scale,
+        );
+        for &DiffuseSlot { slot, flip, normal } in &diffuse[..m] {
+            let slot = slot as usize;
+            let n_d = normal.as_dvec3();
+            let towards = if flip { -n_d } else { n_d };
+            let d = cosine_hemisphere(&mut rngs[slot], towards).as_vec3();
+            (dx[slot], dy[slot], dz[slot]) = (d.x, d.y, d.z);
+        }
+        for v in [
+            &mut rays.ox,
+            &mut rays.oy,
+            &mut rays.oz,
+            &mut rays.dx,
+            &mut rays.dy,
+            &mut rays.dz,
+            &mut rays.tnear,
+            &mut rays.tfar,
+        ] {
+            v.truncate(j);
+        }
+        lanes.truncate(j);
         if !s.shadow_rays.is_empty() {
             self.caster.occluded(&s.shadow_rays, &mut s.occluded);
             tally.rays += s.shadow_rays.len() as u64;
@@ -320,12 +459,56 @@ impl<'a> Tracer<'a> {
         }
     }
 
+    /// Scores receiver `r` for every segment of the batch that crosses it (before the
+    /// hits are processed: compaction overwrites the rays). A receiver lying on a
+    /// surface (within f32 precision) counts the photons that hit the surface and those
+    /// that leave it: one placed on a floor measures the floor's illuminance, or its
+    /// luminance. Next-event receivers take by crossing only what they do not connect:
+    /// light from specular interactions, and diffuse light from vertices in their near
+    /// zone.
+    #[allow(clippy::too_many_arguments)]
+    fn score_crossings(
+        &self,
+        r: &ReceiverGrid,
+        rays: &RayBatch,
+        t_hit: &[f32],
+        lanes: &Lanes,
+        flux: f64,
+        marks: &mut Vec<bool>,
+        pending: &mut Vec<(u32, u32, f64)>,
+    ) {
+        let n = t_hit.len();
+        let (ox, oy, oz) = (&rays.ox[..n], &rays.oy[..n], &rays.oz[..n]);
+        let (dx, dy, dz) = (&rays.dx[..n], &rays.dy[..n], &rays.dz[..n]);
+        let slack = self.receiver_slack;
+        r.mark_crossings([ox, oy, oz], [dx, dy, dz], t_hit, slack, marks);
+        let (offsets, segments) = (&lanes.offset[..n], &lanes.segment[..n]);
+        let next_event = r.next_event();
+        for k in marks.iter().enumerate().filter(|m| *m.1).map(|m| m.0) {
+            let origin = DVec3::new(ox[k] as f64, oy[k] as f64, oz[k] as f64);
+            let dir = DVec3::new(dx[k] as f64, dy[k] as f64, dz[k] as f64);
+            let t_reach = t_hit[k] as f64 + slack;
+            let Some(c) = r.crossing(origin, dir, -slack, t_reach) else {
+                continue;
+            };
+            let scores = !next_event
+                || match segments[k] {
+                    Segment::Emitted => false,
+                    Segment::Specular => true,
+                    Segment::Diffuse => c.distance < r.near_zone_m,
+                };
+            if scores {
+                pending.push((offsets[k], c.cell, c.score_per_lm * flux));
+            }
+        }
+    }
+
     /// Next-event estimation from a diffuse or glossy vertex at `p` (unit geometric
     /// normal `normal`, `wo` towards where the photon came from) to every next-event
     /// receiver: one sampled receiver point ([`ReceiverGrid::connect`]) and its expected
     /// score, w·f(wo, wi)·|cos θ_i| times the connection's factor (w·ρ·cos θ/π for a
     /// Lambertian surface), queued behind a shadow ray. It does not depend on what the
-    /// roulette then picks.
+    /// roulette then picks. `lane` is the photon's offset in the chunk and its stream.
     #[allow(clippy::too_many_arguments)]
     #[inline]
     fn connect(
@@ -333,12 +516,13 @@ impl<'a> Tracer<'a> {
         p: Vec3,
         normal: Vec3,
         wo: DVec3,
-        bsdf: &Bsdf,
-        lane: &mut Lane,
+        surfacing: &Surfacing,
+        (offset, rng): (u32, &mut Pcg32),
         flux: f64,
         shadow_rays: &mut RayBatch,
         shadow_scores: &mut Vec<(u32, u32, f64)>,
     ) {
+        let bsdf = &surfacing.bsdf;
         let n = normal.as_dvec3();
         let facing = if wo.dot(n) >= 0.0 { normal } else { -normal };
         for (r, stratum) in self
@@ -347,7 +531,7 @@ impl<'a> Tracer<'a> {
             .filter(|r| r.next_event())
             .flat_map(|r| (0..r.connections).map(move |s| (r, s)))
         {
-            let Some(c) = r.connect(p.as_dvec3(), stratum, &mut lane.rng) else {
+            let Some(c) = r.connect(p.as_dvec3(), stratum, rng) else {
                 continue;
             };
             // Near the receiver the connection's 1/d² makes the variance infinite: the
@@ -362,7 +546,7 @@ impl<'a> Tracer<'a> {
             let (rho, tau) = bsdf.diffuse();
             let coefficient = if cos_s > 0.0 { rho } else { tau };
             let mut intensity = flux * coefficient * cos_s.abs() * std::f64::consts::FRAC_1_PI;
-            if bsdf.glossy_connectable() {
+            if surfacing.glossy_connectable {
                 intensity += flux * bsdf.f_glossy(wo, c.dir, n) * cos_s.abs();
             }
             if intensity.is_nan() || intensity <= 0.0 {
@@ -374,9 +558,22 @@ impl<'a> Tracer<'a> {
             // Stop just short of the receiver point, which may lie on a surface.
             let t_far = (1.0 - (2.0 * self.receiver_slack / c.distance) as f32).max(0.5);
             shadow_rays.push(o.into(), to_q.into(), 0.0, t_far);
-            shadow_scores.push((lane.offset, c.cell, score));
+            shadow_scores.push((offset, c.cell, score));
         }
     }
+}
+
+/// [`ChunkTally::record_history_hits`] if `ended` is 1, nothing if 0: no branch, for
+/// the photon pass's roulette.
+#[inline]
+fn record_history_hits_if(tally: &mut ChunkTally, hits: u32, ended: u32) {
+    let (k, e) = (hits as u64, ended as u64);
+    let k2 = k * k;
+    let h = &mut tally.history_hits;
+    h[0] += e * k;
+    h[1] += e * k2;
+    h[2] += e * k2 * k;
+    h[3] += e * k2 * k2;
 }
 
 /// Sums each photon history's scores per cell (a photon crossing a cell twice scores

@@ -61,17 +61,56 @@ pub fn fresnel_dielectric(cos_i: f64, cos_t: f64, eta: f64) -> f64 {
 /// a 10 km site behave alike.
 #[inline]
 pub fn offset_origin(p: Vec3, n: Vec3, scene_scale: f32) -> Vec3 {
-    const INT_SCALE: f32 = 256.0;
-    let near_origin = scene_scale * (1.0 / 32.0);
-    let float_scale = scene_scale * (1.0 / 1_048_576.0);
-    let offset = |p: f32, n: f32| -> f32 {
-        if p.abs() < near_origin {
-            return p + float_scale * n;
+    let offset = Offset::new(scene_scale);
+    Vec3::new(
+        offset.coordinate(p.x, n.x),
+        offset.coordinate(p.y, n.y),
+        offset.coordinate(p.z, n.z),
+    )
+}
+
+/// [`offset_origin`] for a batch, in place: each point `p[..][k]` moves off its surface
+/// along `n[..][k]`. One straight pass the compiler can vectorise; the same numbers as
+/// [`offset_origin`], point by point.
+pub fn offset_origins(p: [&mut [f32]; 3], n: [&[f32]; 3], scene_scale: f32) {
+    let offset = Offset::new(scene_scale);
+    for (p, n) in p.into_iter().zip(n) {
+        for (p, &n) in p.iter_mut().zip(n) {
+            *p = offset.coordinate(*p, n);
         }
+    }
+}
+
+/// The two regimes of [`offset_origin`] for one scene.
+#[derive(Clone, Copy)]
+struct Offset {
+    near_origin: f32,
+    float_scale: f32,
+}
+
+impl Offset {
+    #[inline(always)]
+    fn new(scene_scale: f32) -> Offset {
+        Offset {
+            near_origin: scene_scale * (1.0 / 32.0),
+            float_scale: scene_scale * (1.0 / 1_048_576.0),
+        }
+    }
+
+    /// One coordinate `p` moved along the normal's component `n` (|n| ≤ 1): both
+    /// regimes are computed and one is kept, without a branch.
+    #[inline(always)]
+    fn coordinate(self, p: f32, n: f32) -> f32 {
+        const INT_SCALE: f32 = 256.0;
         let of_i = (INT_SCALE * n) as i32;
-        f32::from_bits((p.to_bits() as i32 + if p < 0.0 { -of_i } else { of_i }) as u32)
-    };
-    Vec3::new(offset(p.x, n.x), offset(p.y, n.y), offset(p.z, n.z))
+        let ulps = f32::from_bits((p.to_bits() as i32 + if p < 0.0 { -of_i } else { of_i }) as u32);
+        let fixed = p + self.float_scale * n;
+        if p.abs() < self.near_origin {
+            fixed
+        } else {
+            ulps
+        }
+    }
 }
 
 #[cfg(test)]
