@@ -20,6 +20,13 @@ pub const CHUNK: usize = 4096;
 /// complexity: a bumpy 100 m × 100 m heightfield under a field of overlapping spheres of
 /// different sizes floating at different heights.
 pub fn procedural_geometry(min_triangles: usize) -> Geometry {
+    let (verts, tris) = procedural_mesh(min_triangles);
+    let zeros = vec![0u32; tris.len()];
+    Geometry::from_world(&verts, &tris, &zeros, &zeros)
+}
+
+/// The world-space vertices and triangles of [`procedural_geometry`].
+pub fn procedural_mesh(min_triangles: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     let mut verts: Vec<DVec3> = Vec::new();
     let mut tris: Vec<[u32; 3]> = Vec::new();
 
@@ -80,8 +87,7 @@ pub fn procedural_geometry(min_triangles: usize) -> Geometry {
             }
         }
     }
-    let zeros = vec![0u32; tris.len()];
-    Geometry::from_world(&verts, &tris, &zeros, &zeros)
+    (verts, tris)
 }
 
 /// Loads a mesh file (OBJ or glTF) through the scene loader as one `Geometry`,
@@ -695,8 +701,15 @@ pub struct ScaleResult {
     pub triangles_traced: u64,
     /// Scene load (or generation) plus acceleration-structure build, wall seconds.
     pub setup_s: f64,
+    /// Of `setup_s`: the scene load or generation (with `Geometry`), and the BVH build.
+    pub load_s: f64,
+    pub bvh_s: f64,
     /// `VmHWM` at the end, MiB.
     pub peak_rss_mib: f64,
+    /// Peak RSS less the RSS before the scene was made, per triangle stored: geometry,
+    /// BVH (with its build's peak), triangle maps and the run's other per-triangle
+    /// buffers.
+    pub bytes_per_triangle: f64,
     /// Incoherent random closest-hit rays through the scene's bounds, wall time.
     pub mrays_per_s: f64,
     /// Photon pass (track estimator), wall time.
@@ -749,18 +762,58 @@ pub fn bench_scale_case(
     photons: u64,
     threads: usize,
 ) -> Result<ScaleResult> {
-    use crate::run::{run, RunOptions};
+    use crate::run::{run_with, RunOptions};
     use crate::scene::Estimator;
     use std::sync::atomic::AtomicBool;
+    let (rss_before_mib, _) = memory_mib();
     let start = Instant::now();
     let scene = match case {
         ScaleCase::Instanced(n) => instanced_scene(mesh, n)?,
         ScaleCase::Flattened(n) => lit_scene("flattened", procedural_geometry(n as usize)),
     };
+    let load_s = start.elapsed().as_secs_f64();
     let backend = crate::accel::Backend::Embree;
     let caster = crate::accel::build(backend, &scene.geometry)?;
     let setup_s = start.elapsed().as_secs_f64();
     let g = &scene.geometry;
+    let mrays_per_s = scale_mrays(g, caster.as_ref(), threads)?;
+    let options = RunOptions {
+        photons: Some(photons),
+        threads,
+        backend,
+        estimator: Some(Estimator::Track),
+        ..RunOptions::from_scene(&scene)
+    };
+    // The photon pass reuses the BVH (a second one would count in the peak RSS).
+    let result = run_with(
+        &scene,
+        &options,
+        caster.as_ref(),
+        Instant::now(),
+        &AtomicBool::new(false),
+        &mut (),
+    )?;
+    let triangles_stored = g.triangle_count() as u64 + g.instanced.stored_triangle_count() as u64;
+    let peak_rss_mib = memory_mib().1;
+    Ok(ScaleResult {
+        case: case.to_string(),
+        instances: g.instanced.instances.len() as u64,
+        triangles_stored,
+        triangles_traced: g.triangle_count() as u64 + g.instanced.flattened_triangle_count(),
+        setup_s,
+        load_s,
+        bvh_s: setup_s - load_s,
+        peak_rss_mib,
+        bytes_per_triangle: (peak_rss_mib - rss_before_mib) * 1048576.0
+            / triangles_stored.max(1) as f64,
+        mrays_per_s,
+        photons_per_s: result.tallies.photons as f64 / result.elapsed_s,
+    })
+}
+
+/// Mrays/s of 200,000 incoherent closest-hit rays through the bounds of everything in
+/// `g` (instances included), on `threads` threads, best of 2.
+fn scale_mrays(g: &Geometry, caster: &dyn RayCaster, threads: usize) -> Result<f64> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -773,33 +826,14 @@ pub fn bench_scale_case(
         (lo.min(ilo), hi.max(ihi))
     };
     let chunks = split(&random_rays(lo, hi, 200_000, 7), CHUNK);
-    let mrays_per_s = rust_mrays(
-        caster.as_ref(),
+    Ok(rust_mrays(
+        caster,
         caster.default_intersect_api(),
         &chunks,
         false,
         Some(&pool),
         2,
-    );
-    let options = RunOptions {
-        photons: Some(photons),
-        threads,
-        backend,
-        estimator: Some(Estimator::Track),
-        ..RunOptions::from_scene(&scene)
-    };
-    let result = run(&scene, &options, &AtomicBool::new(false), &mut ())?;
-    let instances = g.instanced.instances.len() as u64;
-    Ok(ScaleResult {
-        case: case.to_string(),
-        instances,
-        triangles_stored: g.triangle_count() as u64 + g.instanced.stored_triangle_count() as u64,
-        triangles_traced: g.triangle_count() as u64 + g.instanced.flattened_triangle_count(),
-        setup_s,
-        peak_rss_mib: memory_mib().1,
-        mrays_per_s,
-        photons_per_s: result.tallies.photons as f64 / result.elapsed_s,
-    })
+    ))
 }
 
 /// The bench-scale table (Markdown) from per-case results.
@@ -807,26 +841,30 @@ pub fn scale_table(results: &[ScaleResult], threads: usize) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "| case | instances | triangles stored | triangles traced | set-up s | peak RSS MiB | Mrays/s | photons/s |"
+        "| case | instances | triangles stored | triangles traced | set-up s (load + BVH) | peak RSS MiB | B/triangle | Mrays/s | photons/s |"
     );
-    let _ = writeln!(out, "|---|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(out, "|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in results {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {:.3e} | {:.2} | {:.0} | {:.2} | {:.2} M |",
+            "| {} | {} | {} | {:.3e} | {:.2} ({:.2} + {:.2}) | {:.0} | {:.0} | {:.2} | {:.2} M |",
             r.case,
             r.instances,
             r.triangles_stored,
             r.triangles_traced as f64,
             r.setup_s,
+            r.load_s,
+            r.bvh_s,
             r.peak_rss_mib,
+            r.bytes_per_triangle,
             r.mrays_per_s,
             r.photons_per_s / 1e6
         );
     }
     let _ = writeln!(
         out,
-        "\nEmbree, {threads} threads; one process per case (peak RSS = its VmHWM); rays: 200,000 \
+        "\nEmbree, {threads} threads; one process per case (peak RSS = its VmHWM; B/triangle = its \
+         growth from before the scene was made, per triangle stored); rays: 200,000 \
          incoherent random closest-hit rays through the bounds; photons: track estimator."
     );
     out

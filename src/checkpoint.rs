@@ -236,7 +236,7 @@ impl SavedTallies {
             rays: t.rays,
             killed_by_bounce_cap: t.killed_by_bounce_cap,
             history_hits: t.history_hits,
-            triangle_hits: t.triangle_hits.clone(),
+            triangle_hits: t.triangle_hits.to_vec(),
             cells: Bytes(pack_cells(&t.cells)),
             direct_replicates: t.direct_replicates,
             direct_rays: t.direct_rays,
@@ -250,7 +250,7 @@ impl SavedTallies {
             rays: self.rays,
             killed_by_bounce_cap: self.killed_by_bounce_cap,
             history_hits: self.history_hits,
-            triangle_hits: self.triangle_hits.clone(),
+            triangle_hits: self.triangle_hits.clone().into(),
             cells: unpack_cells(&self.cells.0)?,
             direct_replicates: self.direct_replicates,
             direct_rays: self.direct_rays,
@@ -392,7 +392,7 @@ impl Checkpoint {
             rays: t.rays,
             killed_by_bounce_cap: t.killed_by_bounce_cap,
             history_hits: t.history_hits,
-            triangle_hits: t.triangle_hits.clone(),
+            triangle_hits: t.triangle_hits.to_vec(),
             cells: Bytes(Vec::new()),
             direct_replicates: t.direct_replicates,
             direct_rays: t.direct_rays,
@@ -780,9 +780,7 @@ pub fn merge(
         for (a, b) in tallies.history_hits.iter_mut().zip(t.history_hits) {
             *a += b;
         }
-        for (a, b) in tallies.triangle_hits.iter_mut().zip(&t.triangle_hits) {
-            *a += b;
-        }
+        tallies.triangle_hits.add(&t.triangle_hits);
         for record in &c.chunks {
             record.to_chunk(&mut chunk);
             tallies.accumulate(&chunk, record.photons as u64);
