@@ -5,6 +5,7 @@
 use crate::accel::embree::{sys, EmbreeScene};
 use crate::accel::{HitBatch, RayApi, RayBatch, RayCaster};
 use crate::scene::Geometry;
+use crate::stats::forecast::HistoryPoint;
 use crate::{Error, Result};
 use glam::{DVec3, Vec3};
 use rand::Rng;
@@ -338,11 +339,11 @@ pub fn bench_rays(
     obvhs: bool,
     progress: &dyn Fn(&str),
 ) -> Result<String> {
-    let iterations = 7;
     let (lo, hi) = local_bounds(geometry);
-    let closest = random_rays(lo, hi, rays, 1);
-    let shadow = random_segments(lo, hi, rays, 2);
-    let (closest_chunks, shadow_chunks) = (split(&closest, CHUNK), split(&shadow, CHUNK));
+    let set = RaySets::new(
+        random_rays(lo, hi, rays, 1),
+        random_segments(lo, hi, rays, 2),
+    );
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
         .build()
@@ -354,25 +355,89 @@ pub fn bench_rays(
         "### {label}: {} triangles, {rays} rays per measurement\n",
         geometry.triangle_count()
     );
-
-    let (rss0, _) = memory_mib();
-    progress("embree: BVH build");
-    let start = Instant::now();
-    let embree = EmbreeScene::new(geometry)?;
-    let embree_build = start.elapsed().as_secs_f64();
-    let (rss1, hwm1) = memory_mib();
-    let mut builds = vec![format!(
-        "embree build {:.3} s, +{:.0} MiB RSS (process peak {:.0} MiB)",
-        embree_build,
-        rss1 - rss0,
-        hwm1
-    )];
-
     let _ = writeln!(
         out,
         "| backend | API | closest 1T | closest {threads}T | occlusion 1T | occlusion {threads}T | C closest 1T | Rust/C closest | C occlusion 1T | Rust/C occlusion |"
     );
     let _ = writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+
+    progress("embree: BVH build");
+    let (embree, note) = timed_build("embree", || EmbreeScene::new(geometry))?;
+    let mut builds = vec![note];
+    let best = embree_rows(&embree, &set, &pool, &mut out, progress);
+    drop(embree);
+
+    #[cfg(feature = "obvhs")]
+    if obvhs {
+        progress("obvhs: BVH build");
+        let (bvh, note) =
+            timed_build("obvhs", || Ok(crate::accel::bvh::ObvhsScene::new(geometry)))?;
+        builds.push(note);
+        progress("obvhs: closest and occlusion rays");
+        let (c1, o1) = obvhs_row(&bvh, &set, &pool, &mut out);
+        builds.push(format!(
+            "Embree (best API) / obvhs, 1 thread: closest {:.2}×, occlusion {:.2}×",
+            best.0 / c1,
+            best.1 / o1
+        ));
+    }
+    #[cfg(not(feature = "obvhs"))]
+    if obvhs {
+        let _ = best;
+        builds.push("obvhs: not in this build (feature `obvhs`)".into());
+    }
+
+    let _ = writeln!(out, "\nFigures in Mrays/s. {}.\n", builds.join("; "));
+    Ok(out)
+}
+
+/// Measurements per figure of `bench_rays` (the best is kept).
+const RAY_ITERATIONS: usize = 7;
+
+/// The closest-hit and shadow rays of `bench_rays`, whole (for the C reference) and in
+/// chunks of [`CHUNK`] (for the Rust backends).
+struct RaySets {
+    closest: RayBatch,
+    shadow: RayBatch,
+    closest_chunks: Vec<RayBatch>,
+    shadow_chunks: Vec<RayBatch>,
+}
+
+impl RaySets {
+    fn new(closest: RayBatch, shadow: RayBatch) -> RaySets {
+        let (closest_chunks, shadow_chunks) = (split(&closest, CHUNK), split(&shadow, CHUNK));
+        RaySets {
+            closest,
+            shadow,
+            closest_chunks,
+            shadow_chunks,
+        }
+    }
+}
+
+/// Builds a backend, timing it and the RSS it adds: (backend, a note for the table).
+fn timed_build<T>(name: &str, build: impl FnOnce() -> Result<T>) -> Result<(T, String)> {
+    let (rss0, _) = memory_mib();
+    let start = Instant::now();
+    let built = build()?;
+    let seconds = start.elapsed().as_secs_f64();
+    let (rss1, hwm1) = memory_mib();
+    let note = format!(
+        "{name} build {seconds:.3} s, +{:.0} MiB RSS (process peak {hwm1:.0} MiB)",
+        rss1 - rss0
+    );
+    Ok((built, note))
+}
+
+/// One table row per Embree API: Rust on 1 and on the pool's threads and the C
+/// reference, closest and occlusion; returns the best 1-thread (closest, occlusion).
+fn embree_rows(
+    embree: &EmbreeScene,
+    set: &RaySets,
+    pool: &rayon::ThreadPool,
+    out: &mut String,
+    progress: &dyn Fn(&str),
+) -> (f64, f64) {
     let (mut best_closest, mut best_occl) = (0.0f64, 0.0f64);
     for api in RayApi::ALL {
         progress(&format!(
@@ -382,18 +447,18 @@ pub fn bench_rays(
         // Rust 1 thread, C 1 thread and Rust on the pool take turns, best of each kept,
         // so a busy machine skews them alike.
         let mut m = [0.0f64; 6]; // closest: rust1, rustN, C; occlusion: rust1, rustN, C
-        for _ in 0..iterations {
+        for _ in 0..RAY_ITERATIONS {
             for (k, (rays, chunks, occl)) in [
-                (&closest, &closest_chunks, false),
-                (&shadow, &shadow_chunks, true),
+                (&set.closest, &set.closest_chunks, false),
+                (&set.shadow, &set.shadow_chunks, true),
             ]
             .into_iter()
             .enumerate()
             {
-                m[3 * k] = m[3 * k].max(rust_mrays(&embree, api, chunks, occl, None, 1));
-                m[3 * k + 2] = m[3 * k + 2].max(c_mrays(&embree, rays, api, occl, 1));
+                m[3 * k] = m[3 * k].max(rust_mrays(embree, api, chunks, occl, None, 1));
+                m[3 * k + 2] = m[3 * k + 2].max(c_mrays(embree, rays, api, occl, 1));
                 m[3 * k + 1] =
-                    m[3 * k + 1].max(rust_mrays(&embree, api, chunks, occl, Some(&pool), 1));
+                    m[3 * k + 1].max(rust_mrays(embree, api, chunks, occl, Some(pool), 1));
             }
         }
         let [c1, cn, cc, o1, on, co] = m;
@@ -407,43 +472,29 @@ pub fn bench_rays(
             o1 / co
         );
     }
-    drop(embree);
+    (best_closest, best_occl)
+}
 
-    #[cfg(feature = "obvhs")]
-    if obvhs {
-        let (rss0, _) = memory_mib();
-        progress("obvhs: BVH build");
-        let start = Instant::now();
-        let bvh = crate::accel::bvh::ObvhsScene::new(geometry);
-        let build = start.elapsed().as_secs_f64();
-        let (rss1, hwm1) = memory_mib();
-        builds.push(format!(
-            "obvhs build {build:.3} s, +{:.0} MiB RSS (process peak {hwm1:.0} MiB)",
-            rss1 - rss0
-        ));
-        let api = RayApi::Single;
-        progress("obvhs: closest and occlusion rays");
-        let c1 = rust_mrays(&bvh, api, &closest_chunks, false, None, iterations);
-        let cn = rust_mrays(&bvh, api, &closest_chunks, false, Some(&pool), iterations);
-        let o1 = rust_mrays(&bvh, api, &shadow_chunks, true, None, iterations);
-        let on = rust_mrays(&bvh, api, &shadow_chunks, true, Some(&pool), iterations);
-        let _ = writeln!(
-            out,
-            "| obvhs | one ray at a time | {c1:.2} | {cn:.2} | {o1:.2} | {on:.2} | – | – | – | – |"
-        );
-        builds.push(format!(
-            "Embree (best API) / obvhs, 1 thread: closest {:.2}×, occlusion {:.2}×",
-            best_closest / c1,
-            best_occl / o1
-        ));
-    }
-    #[cfg(not(feature = "obvhs"))]
-    if obvhs {
-        builds.push("obvhs: not in this build (feature `obvhs`)".into());
-    }
-
-    let _ = writeln!(out, "\nFigures in Mrays/s. {}.\n", builds.join("; "));
-    Ok(out)
+/// The obvhs row (one ray at a time, no C reference); returns its 1-thread (closest,
+/// occlusion).
+#[cfg(feature = "obvhs")]
+fn obvhs_row(
+    bvh: &crate::accel::bvh::ObvhsScene,
+    set: &RaySets,
+    pool: &rayon::ThreadPool,
+    out: &mut String,
+) -> (f64, f64) {
+    let api = RayApi::Single;
+    let it = RAY_ITERATIONS;
+    let c1 = rust_mrays(bvh, api, &set.closest_chunks, false, None, it);
+    let cn = rust_mrays(bvh, api, &set.closest_chunks, false, Some(pool), it);
+    let o1 = rust_mrays(bvh, api, &set.shadow_chunks, true, None, it);
+    let on = rust_mrays(bvh, api, &set.shadow_chunks, true, Some(pool), it);
+    let _ = writeln!(
+        out,
+        "| obvhs | one ray at a time | {c1:.2} | {cn:.2} | {o1:.2} | {on:.2} | – | – | – | – |"
+    );
+    (c1, o1)
 }
 
 /// A scene for photon benchmarks over `geometry`: one grey Lambertian material
@@ -576,7 +627,6 @@ pub fn bench_accuracy(
         .receivers
         .get(receiver)
         .ok_or_else(|| Error::input("--receiver", format!("no receiver named `{receiver}`")))?;
-    let h = &result.history;
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -585,9 +635,22 @@ pub fn bench_accuracy(
         r.estimator,
         100.0 * target
     );
-    let _ = writeln!(
-        out,
-        "Stopped on {} after {:.3} s (set-up {:.3} s), {} photons, {} rays; direct light {:.3} s ({} replicates, {} shadow rays); statistics and forecasts {:.4} s = {:.3} % of the run; merging {:.4} s = {:.3} %; FOM {:.0} (stable: {}), VOV {:.4}.\n",
+    let _ = writeln!(out, "{}\n", run_line(&result, &summary));
+    let h = &result.history;
+    let _ = writeln!(out, "Time to accuracy: {}.\n", times_to_accuracy(h));
+    if let Some(line) = forecast_check(h) {
+        let _ = writeln!(out, "{line}\n");
+    }
+    out += &history_table(h);
+    Ok(out)
+}
+
+/// How the run of `bench_accuracy` went: stop, times, counts, the statistics' share of
+/// the run, FOM and VOV.
+fn run_line(result: &crate::run::RunResult, summary: &crate::output::summary::Summary) -> String {
+    let share = |s: f64| 100.0 * s / result.elapsed_s.max(1e-9);
+    format!(
+        "Stopped on {} after {:.3} s (set-up {:.3} s), {} photons, {} rays; direct light {:.3} s ({} replicates, {} shadow rays); statistics and forecasts {:.4} s = {:.3} % of the run; merging {:.4} s = {:.3} %; FOM {:.0} (stable: {}), VOV {:.4}.",
         result.stop_reason.as_str(),
         result.elapsed_s,
         result.setup.setup_s,
@@ -597,17 +660,20 @@ pub fn bench_accuracy(
         result.tallies.direct_replicates,
         result.tallies.direct_rays,
         result.stats_s,
-        100.0 * result.stats_s / result.elapsed_s.max(1e-9),
+        share(result.stats_s),
         result.merge_s,
-        100.0 * result.merge_s / result.elapsed_s.max(1e-9),
+        share(result.merge_s),
         summary.reliability.fom,
         summary.reliability.fom_stable,
         summary.reliability.vov,
-    );
-    let mut reached = Vec::new();
-    for goal in [0.05, 0.02, 0.01] {
-        let at = h.iter().find(|p| p.rel_error <= goal);
-        reached.push(match at {
+    )
+}
+
+/// When the error first reached 5, 2 and 1 %.
+fn times_to_accuracy(h: &[HistoryPoint]) -> String {
+    let reached: Vec<String> = [0.05, 0.02, 0.01]
+        .into_iter()
+        .map(|goal| match h.iter().find(|p| p.rel_error <= goal) {
             Some(p) => format!(
                 "{:.0} %: {:.3} s ({} photons)",
                 100.0 * goal,
@@ -615,29 +681,35 @@ pub fn bench_accuracy(
                 p.photons
             ),
             None => format!("{:.0} %: not reached", 100.0 * goal),
-        });
-    }
-    let _ = writeln!(out, "Time to accuracy: {}.\n", reached.join(", "));
-    if let (Some(last), Some(early)) = (
-        h.last(),
-        h.iter()
-            .find(|p| p.photons.saturating_mul(10) >= h.last().map_or(0, |l| l.photons)),
-    ) {
-        if let (Some(fs), Some(fp)) = (early.forecast_s, early.forecast_photons) {
-            let _ = writeln!(
-                out,
-                "Forecast made at {:.1} % of the photons ({:.3} s): {:.3} s and {} photons; actual {:.3} s and {} photons: time {:+.2} %, photons {:+.2} %.\n",
-                100.0 * early.photons as f64 / last.photons as f64,
-                early.elapsed_s,
-                fs,
-                fp,
-                last.elapsed_s,
-                last.photons,
-                100.0 * (fs / last.elapsed_s - 1.0),
-                100.0 * (fp as f64 / last.photons as f64 - 1.0),
-            );
-        }
-    }
+        })
+        .collect();
+    reached.join(", ")
+}
+
+/// The forecast made once 10 % of the photons were traced against what the run needed
+/// (`None` without history or without a forecast then).
+fn forecast_check(h: &[HistoryPoint]) -> Option<String> {
+    let last = h.last()?;
+    let early = h
+        .iter()
+        .find(|p| p.photons.saturating_mul(10) >= last.photons)?;
+    let (fs, fp) = (early.forecast_s?, early.forecast_photons?);
+    Some(format!(
+        "Forecast made at {:.1} % of the photons ({:.3} s): {:.3} s and {} photons; actual {:.3} s and {} photons: time {:+.2} %, photons {:+.2} %.",
+        100.0 * early.photons as f64 / last.photons as f64,
+        early.elapsed_s,
+        fs,
+        fp,
+        last.elapsed_s,
+        last.photons,
+        100.0 * (fs / last.elapsed_s - 1.0),
+        100.0 * (fp as f64 / last.photons as f64 - 1.0),
+    ))
+}
+
+/// The error-versus-time history with the forecasts made along the way (Markdown).
+fn history_table(h: &[HistoryPoint]) -> String {
+    let mut out = String::new();
     let _ = writeln!(
         out,
         "| elapsed s | photons | error % | forecast s | forecast photons |"
@@ -654,7 +726,7 @@ pub fn bench_accuracy(
             p.forecast_photons.map_or("–".into(), |f| f.to_string()),
         );
     }
-    Ok(out)
+    out
 }
 
 /// One configuration of `luxtally bench-scale`.

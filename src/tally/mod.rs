@@ -184,9 +184,10 @@ impl TriangleCounts {
         }
     }
 
-    /// Adds `counts` count by count (integers: any order gives the same sums).
-    pub fn add(&mut self, counts: &[u64]) {
-        for (i, &n) in counts.iter().enumerate().take(self.len()) {
+    /// Adds `other` count by count (integers: any order gives the same sums).
+    pub fn add(&mut self, other: &TriangleCounts) {
+        for i in 0..self.len().min(other.len()) {
+            let n = other.get(i);
             if n > 0 {
                 self.add_at(i, n);
             }
@@ -203,6 +204,20 @@ impl TriangleCounts {
     /// Every count as u64 (checkpoints).
     pub fn to_vec(&self) -> Vec<u64> {
         (0..self.len()).map(|i| self.get(i)).collect()
+    }
+}
+
+/// Saved as the sequence of u64 counts, so the bytes are those of a `Vec<u64>`
+/// whichever width the counts are held in.
+impl serde::Serialize for TriangleCounts {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_seq((0..self.len()).map(|i| self.get(i)))
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for TriangleCounts {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        Vec::<u64>::deserialize(deserializer).map(TriangleCounts::from)
     }
 }
 
@@ -404,8 +419,8 @@ mod tests {
         assert!(matches!(c, TriangleCounts::Wide(_)));
         assert_eq!(c.to_vec(), vec![0, u32::MAX as u64 + 1, 1]);
         let mut d = TriangleCounts::zeros(3);
-        d.add(&c.to_vec());
-        d.add(&c.to_vec());
+        d.add(&c);
+        d.add(&c);
         assert_eq!(d.to_vec(), vec![0, 2 * (u32::MAX as u64 + 1), 2]);
         assert_eq!(TriangleCounts::from(d.to_vec()), d);
         assert_eq!(
