@@ -82,8 +82,9 @@ pub struct Geometry {
     pub material: Vec<u32>,
     /// Triangle area in m², computed in f64 from world coordinates.
     pub area_m2: Vec<f64>,
-    /// Unit geometric normal per triangle, (v1 − v0) × (v2 − v0) orientation.
-    pub normal: Vec<Vec3>,
+    /// Unit geometric normal per triangle, (v1 − v0) × (v2 − v0) orientation (shared
+    /// with the obvhs backend).
+    pub normal: Shared<Vec3>,
     /// Index of the `[[objects]]` entry each triangle came from.
     pub object: Vec<u32>,
     /// Objects without a map (`map = false`): shared meshes placed by transforms, traced
@@ -573,7 +574,7 @@ impl Geometry {
             self.material = material.to_vec();
             self.object = object.to_vec();
             self.area_m2 = area_m2;
-            self.normal = normal;
+            self.normal = normal.into();
             return;
         }
         // Triangles of zero (or NaN) area can never be hit and have no illuminance.
@@ -586,7 +587,7 @@ impl Geometry {
         self.material = kept.iter().map(|&k| material[k]).collect();
         self.object = kept.iter().map(|&k| object[k]).collect();
         self.area_m2 = kept.iter().map(|&k| area_m2[k]).collect();
-        self.normal = kept.iter().map(|&k| normal[k]).collect();
+        self.normal = kept.iter().map(|&k| normal[k]).collect::<Vec<_>>().into();
     }
 }
 
