@@ -182,6 +182,22 @@ pub fn memory_mib() -> (f64, f64) {
     (field("VmRSS:"), field("VmHWM:"))
 }
 
+/// CPU seconds (user + system, all threads) used by this process so far (0 where
+/// /proc is unavailable).
+pub fn process_cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // Fields after the parenthesised command name: utime and stime are the 12th and
+    // 13th, in clock ticks (100 per second on Linux).
+    let fields: Vec<&str> = stat
+        .rsplit_once(')')
+        .map_or(Vec::new(), |(_, rest)| rest.split_whitespace().collect());
+    let ticks = |k: usize| fields.get(k).and_then(|f| f.parse::<f64>().ok());
+    match (ticks(11), ticks(12)) {
+        (Some(user), Some(system)) => (user + system) / 100.0,
+        _ => 0.0,
+    }
+}
+
 /// The SoA rays as the C reference reads them.
 #[repr(C)]
 struct CRays {
@@ -776,6 +792,9 @@ pub struct ScaleResult {
     /// Of `setup_s`: the scene load or generation (with `Geometry`), and the BVH build.
     pub load_s: f64,
     pub bvh_s: f64,
+    /// CPU seconds (all threads, user + system) of the set-up: what it would take on
+    /// idle cores, whatever else the machine runs.
+    pub setup_cpu_s: f64,
     /// `VmHWM` at the end, MiB.
     pub peak_rss_mib: f64,
     /// Peak RSS less the RSS before the scene was made, per triangle stored: geometry,
@@ -838,6 +857,7 @@ pub fn bench_scale_case(
     use crate::scene::Estimator;
     use std::sync::atomic::AtomicBool;
     let (rss_before_mib, _) = memory_mib();
+    let cpu_before_s = process_cpu_seconds();
     let start = Instant::now();
     let scene = match case {
         ScaleCase::Instanced(n) => instanced_scene(mesh, n)?,
@@ -847,6 +867,7 @@ pub fn bench_scale_case(
     let backend = crate::accel::Backend::Embree;
     let caster = crate::accel::build(backend, &scene.geometry)?;
     let setup_s = start.elapsed().as_secs_f64();
+    let setup_cpu_s = process_cpu_seconds() - cpu_before_s;
     let g = &scene.geometry;
     let mrays_per_s = scale_mrays(g, caster.as_ref(), threads)?;
     let options = RunOptions {
@@ -875,6 +896,7 @@ pub fn bench_scale_case(
         setup_s,
         load_s,
         bvh_s: setup_s - load_s,
+        setup_cpu_s,
         peak_rss_mib,
         bytes_per_triangle: (peak_rss_mib - rss_before_mib) * 1048576.0
             / triangles_stored.max(1) as f64,
@@ -913,13 +935,13 @@ pub fn scale_table(results: &[ScaleResult], threads: usize) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "| case | instances | triangles stored | triangles traced | set-up s (load + BVH) | peak RSS MiB | B/triangle | Mrays/s | photons/s |"
+        "| case | instances | triangles stored | triangles traced | set-up s (load + BVH) | set-up CPU s | peak RSS MiB | B/triangle | Mrays/s | photons/s |"
     );
-    let _ = writeln!(out, "|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(out, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in results {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {:.3e} | {:.2} ({:.2} + {:.2}) | {:.0} | {:.0} | {:.2} | {:.2} M |",
+            "| {} | {} | {} | {:.3e} | {:.2} ({:.2} + {:.2}) | {:.2} | {:.0} | {:.0} | {:.2} | {:.2} M |",
             r.case,
             r.instances,
             r.triangles_stored,
@@ -927,6 +949,7 @@ pub fn scale_table(results: &[ScaleResult], threads: usize) -> String {
             r.setup_s,
             r.load_s,
             r.bvh_s,
+            r.setup_cpu_s,
             r.peak_rss_mib,
             r.bytes_per_triangle,
             r.mrays_per_s,

@@ -532,7 +532,7 @@ impl Geometry {
         let origin = bounds.centre();
         let mut g = Geometry {
             origin,
-            vertices: Shared::padded(vertices.iter().map(|v| (*v - origin).as_vec3()).collect()),
+            vertices: Shared::padded(local_vertices(vertices, origin)),
             instanced: Instanced::place(protos, &placed, origin),
             ..Geometry::default()
         };
@@ -589,6 +589,14 @@ impl Geometry {
         self.area_m2 = kept.iter().map(|&k| area_m2[k]).collect();
         self.normal = kept.iter().map(|&k| normal[k]).collect::<Vec<_>>().into();
     }
+}
+
+/// World-space vertices in the local frame at `origin`, with room for one more (see
+/// [`Shared::padded`]: no reallocation there).
+fn local_vertices(vertices: &[DVec3], origin: DVec3) -> Vec<Vec3> {
+    let mut local = Vec::with_capacity(vertices.len() + 1);
+    local.extend(vertices.iter().map(|v| (*v - origin).as_vec3()));
+    local
 }
 
 /// A growing axis-aligned box (empty until the first point).

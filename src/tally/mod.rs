@@ -197,8 +197,17 @@ impl TriangleCounts {
     /// Triangle `k`'s [`CODES_PER_TRIANGLE`] counts.
     #[inline]
     pub fn slots(&self, k: usize) -> [u64; CODES_PER_TRIANGLE] {
-        let at = k * CODES_PER_TRIANGLE;
-        std::array::from_fn(|s| self.get(at + s))
+        let range = k * CODES_PER_TRIANGLE..(k + 1) * CODES_PER_TRIANGLE;
+        match self {
+            TriangleCounts::Narrow(v) => {
+                let s = &v[range];
+                std::array::from_fn(|i| s[i] as u64)
+            }
+            TriangleCounts::Wide(v) => {
+                let s = &v[range];
+                std::array::from_fn(|i| s[i])
+            }
+        }
     }
 
     /// Every count as u64 (checkpoints).
