@@ -5,6 +5,7 @@
 use crate::accel::embree::{sys, EmbreeScene};
 use crate::accel::{HitBatch, RayApi, RayBatch, RayCaster};
 use crate::scene::Geometry;
+use crate::stats::forecast::HistoryPoint;
 use crate::{Error, Result};
 use glam::{DVec3, Vec3};
 use rand::Rng;
@@ -20,6 +21,13 @@ pub const CHUNK: usize = 4096;
 /// complexity: a bumpy 100 m × 100 m heightfield under a field of overlapping spheres of
 /// different sizes floating at different heights.
 pub fn procedural_geometry(min_triangles: usize) -> Geometry {
+    let (verts, tris) = procedural_mesh(min_triangles);
+    let zeros = vec![0u32; tris.len()];
+    Geometry::from_world(&verts, &tris, &zeros, &zeros)
+}
+
+/// The world-space vertices and triangles of [`procedural_geometry`].
+pub fn procedural_mesh(min_triangles: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     let mut verts: Vec<DVec3> = Vec::new();
     let mut tris: Vec<[u32; 3]> = Vec::new();
 
@@ -80,8 +88,7 @@ pub fn procedural_geometry(min_triangles: usize) -> Geometry {
             }
         }
     }
-    let zeros = vec![0u32; tris.len()];
-    Geometry::from_world(&verts, &tris, &zeros, &zeros)
+    (verts, tris)
 }
 
 /// Loads a mesh file (OBJ or glTF) through the scene loader as one `Geometry`,
@@ -173,6 +180,22 @@ pub fn memory_mib() -> (f64, f64) {
             .map_or(0.0, |kib| kib / 1024.0)
     };
     (field("VmRSS:"), field("VmHWM:"))
+}
+
+/// CPU seconds (user + system, all threads) used by this process so far (0 where
+/// /proc is unavailable).
+pub fn process_cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // Fields after the parenthesised command name: utime and stime are the 12th and
+    // 13th, in clock ticks (100 per second on Linux).
+    let fields: Vec<&str> = stat
+        .rsplit_once(')')
+        .map_or(Vec::new(), |(_, rest)| rest.split_whitespace().collect());
+    let ticks = |k: usize| fields.get(k).and_then(|f| f.parse::<f64>().ok());
+    match (ticks(11), ticks(12)) {
+        (Some(user), Some(system)) => (user + system) / 100.0,
+        _ => 0.0,
+    }
 }
 
 /// The SoA rays as the C reference reads them.
@@ -332,11 +355,11 @@ pub fn bench_rays(
     obvhs: bool,
     progress: &dyn Fn(&str),
 ) -> Result<String> {
-    let iterations = 7;
     let (lo, hi) = local_bounds(geometry);
-    let closest = random_rays(lo, hi, rays, 1);
-    let shadow = random_segments(lo, hi, rays, 2);
-    let (closest_chunks, shadow_chunks) = (split(&closest, CHUNK), split(&shadow, CHUNK));
+    let set = RaySets::new(
+        random_rays(lo, hi, rays, 1),
+        random_segments(lo, hi, rays, 2),
+    );
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
         .build()
@@ -348,25 +371,89 @@ pub fn bench_rays(
         "### {label}: {} triangles, {rays} rays per measurement\n",
         geometry.triangle_count()
     );
-
-    let (rss0, _) = memory_mib();
-    progress("embree: BVH build");
-    let start = Instant::now();
-    let embree = EmbreeScene::new(geometry)?;
-    let embree_build = start.elapsed().as_secs_f64();
-    let (rss1, hwm1) = memory_mib();
-    let mut builds = vec![format!(
-        "embree build {:.3} s, +{:.0} MiB RSS (process peak {:.0} MiB)",
-        embree_build,
-        rss1 - rss0,
-        hwm1
-    )];
-
     let _ = writeln!(
         out,
         "| backend | API | closest 1T | closest {threads}T | occlusion 1T | occlusion {threads}T | C closest 1T | Rust/C closest | C occlusion 1T | Rust/C occlusion |"
     );
     let _ = writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+
+    progress("embree: BVH build");
+    let (embree, note) = timed_build("embree", || EmbreeScene::new(geometry))?;
+    let mut builds = vec![note];
+    let best = embree_rows(&embree, &set, &pool, &mut out, progress);
+    drop(embree);
+
+    #[cfg(feature = "obvhs")]
+    if obvhs {
+        progress("obvhs: BVH build");
+        let (bvh, note) =
+            timed_build("obvhs", || Ok(crate::accel::bvh::ObvhsScene::new(geometry)))?;
+        builds.push(note);
+        progress("obvhs: closest and occlusion rays");
+        let (c1, o1) = obvhs_row(&bvh, &set, &pool, &mut out);
+        builds.push(format!(
+            "Embree (best API) / obvhs, 1 thread: closest {:.2}×, occlusion {:.2}×",
+            best.0 / c1,
+            best.1 / o1
+        ));
+    }
+    #[cfg(not(feature = "obvhs"))]
+    if obvhs {
+        let _ = best;
+        builds.push("obvhs: not in this build (feature `obvhs`)".into());
+    }
+
+    let _ = writeln!(out, "\nFigures in Mrays/s. {}.\n", builds.join("; "));
+    Ok(out)
+}
+
+/// Measurements per figure of `bench_rays` (the best is kept).
+const RAY_ITERATIONS: usize = 7;
+
+/// The closest-hit and shadow rays of `bench_rays`, whole (for the C reference) and in
+/// chunks of [`CHUNK`] (for the Rust backends).
+struct RaySets {
+    closest: RayBatch,
+    shadow: RayBatch,
+    closest_chunks: Vec<RayBatch>,
+    shadow_chunks: Vec<RayBatch>,
+}
+
+impl RaySets {
+    fn new(closest: RayBatch, shadow: RayBatch) -> RaySets {
+        let (closest_chunks, shadow_chunks) = (split(&closest, CHUNK), split(&shadow, CHUNK));
+        RaySets {
+            closest,
+            shadow,
+            closest_chunks,
+            shadow_chunks,
+        }
+    }
+}
+
+/// Builds a backend, timing it and the RSS it adds: (backend, a note for the table).
+fn timed_build<T>(name: &str, build: impl FnOnce() -> Result<T>) -> Result<(T, String)> {
+    let (rss0, _) = memory_mib();
+    let start = Instant::now();
+    let built = build()?;
+    let seconds = start.elapsed().as_secs_f64();
+    let (rss1, hwm1) = memory_mib();
+    let note = format!(
+        "{name} build {seconds:.3} s, +{:.0} MiB RSS (process peak {hwm1:.0} MiB)",
+        rss1 - rss0
+    );
+    Ok((built, note))
+}
+
+/// One table row per Embree API: Rust on 1 and on the pool's threads and the C
+/// reference, closest and occlusion; returns the best 1-thread (closest, occlusion).
+fn embree_rows(
+    embree: &EmbreeScene,
+    set: &RaySets,
+    pool: &rayon::ThreadPool,
+    out: &mut String,
+    progress: &dyn Fn(&str),
+) -> (f64, f64) {
     let (mut best_closest, mut best_occl) = (0.0f64, 0.0f64);
     for api in RayApi::ALL {
         progress(&format!(
@@ -376,18 +463,18 @@ pub fn bench_rays(
         // Rust 1 thread, C 1 thread and Rust on the pool take turns, best of each kept,
         // so a busy machine skews them alike.
         let mut m = [0.0f64; 6]; // closest: rust1, rustN, C; occlusion: rust1, rustN, C
-        for _ in 0..iterations {
+        for _ in 0..RAY_ITERATIONS {
             for (k, (rays, chunks, occl)) in [
-                (&closest, &closest_chunks, false),
-                (&shadow, &shadow_chunks, true),
+                (&set.closest, &set.closest_chunks, false),
+                (&set.shadow, &set.shadow_chunks, true),
             ]
             .into_iter()
             .enumerate()
             {
-                m[3 * k] = m[3 * k].max(rust_mrays(&embree, api, chunks, occl, None, 1));
-                m[3 * k + 2] = m[3 * k + 2].max(c_mrays(&embree, rays, api, occl, 1));
+                m[3 * k] = m[3 * k].max(rust_mrays(embree, api, chunks, occl, None, 1));
+                m[3 * k + 2] = m[3 * k + 2].max(c_mrays(embree, rays, api, occl, 1));
                 m[3 * k + 1] =
-                    m[3 * k + 1].max(rust_mrays(&embree, api, chunks, occl, Some(&pool), 1));
+                    m[3 * k + 1].max(rust_mrays(embree, api, chunks, occl, Some(pool), 1));
             }
         }
         let [c1, cn, cc, o1, on, co] = m;
@@ -401,43 +488,29 @@ pub fn bench_rays(
             o1 / co
         );
     }
-    drop(embree);
+    (best_closest, best_occl)
+}
 
-    #[cfg(feature = "obvhs")]
-    if obvhs {
-        let (rss0, _) = memory_mib();
-        progress("obvhs: BVH build");
-        let start = Instant::now();
-        let bvh = crate::accel::bvh::ObvhsScene::new(geometry);
-        let build = start.elapsed().as_secs_f64();
-        let (rss1, hwm1) = memory_mib();
-        builds.push(format!(
-            "obvhs build {build:.3} s, +{:.0} MiB RSS (process peak {hwm1:.0} MiB)",
-            rss1 - rss0
-        ));
-        let api = RayApi::Single;
-        progress("obvhs: closest and occlusion rays");
-        let c1 = rust_mrays(&bvh, api, &closest_chunks, false, None, iterations);
-        let cn = rust_mrays(&bvh, api, &closest_chunks, false, Some(&pool), iterations);
-        let o1 = rust_mrays(&bvh, api, &shadow_chunks, true, None, iterations);
-        let on = rust_mrays(&bvh, api, &shadow_chunks, true, Some(&pool), iterations);
-        let _ = writeln!(
-            out,
-            "| obvhs | one ray at a time | {c1:.2} | {cn:.2} | {o1:.2} | {on:.2} | – | – | – | – |"
-        );
-        builds.push(format!(
-            "Embree (best API) / obvhs, 1 thread: closest {:.2}×, occlusion {:.2}×",
-            best_closest / c1,
-            best_occl / o1
-        ));
-    }
-    #[cfg(not(feature = "obvhs"))]
-    if obvhs {
-        builds.push("obvhs: not in this build (feature `obvhs`)".into());
-    }
-
-    let _ = writeln!(out, "\nFigures in Mrays/s. {}.\n", builds.join("; "));
-    Ok(out)
+/// The obvhs row (one ray at a time, no C reference); returns its 1-thread (closest,
+/// occlusion).
+#[cfg(feature = "obvhs")]
+fn obvhs_row(
+    bvh: &crate::accel::bvh::ObvhsScene,
+    set: &RaySets,
+    pool: &rayon::ThreadPool,
+    out: &mut String,
+) -> (f64, f64) {
+    let api = RayApi::Single;
+    let it = RAY_ITERATIONS;
+    let c1 = rust_mrays(bvh, api, &set.closest_chunks, false, None, it);
+    let cn = rust_mrays(bvh, api, &set.closest_chunks, false, Some(pool), it);
+    let o1 = rust_mrays(bvh, api, &set.shadow_chunks, true, None, it);
+    let on = rust_mrays(bvh, api, &set.shadow_chunks, true, Some(pool), it);
+    let _ = writeln!(
+        out,
+        "| obvhs | one ray at a time | {c1:.2} | {cn:.2} | {o1:.2} | {on:.2} | – | – | – | – |"
+    );
+    (c1, o1)
 }
 
 /// A scene for photon benchmarks over `geometry`: one grey Lambertian material
@@ -615,7 +688,6 @@ pub fn bench_accuracy(
         .receivers
         .get(receiver)
         .ok_or_else(|| Error::input("--receiver", format!("no receiver named `{receiver}`")))?;
-    let h = &result.history;
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -624,9 +696,22 @@ pub fn bench_accuracy(
         r.estimator,
         100.0 * target
     );
-    let _ = writeln!(
-        out,
-        "Stopped on {} after {:.3} s (set-up {:.3} s), {} photons, {} rays; direct light {:.3} s ({} replicates, {} shadow rays); statistics and forecasts {:.4} s = {:.3} % of the run; merging {:.4} s = {:.3} %; FOM {:.0} (stable: {}), VOV {:.4}.\n",
+    let _ = writeln!(out, "{}\n", run_line(&result, &summary));
+    let h = &result.history;
+    let _ = writeln!(out, "Time to accuracy: {}.\n", times_to_accuracy(h));
+    if let Some(line) = forecast_check(h) {
+        let _ = writeln!(out, "{line}\n");
+    }
+    out += &history_table(h);
+    Ok(out)
+}
+
+/// How the run of `bench_accuracy` went: stop, times, counts, the statistics' share of
+/// the run, FOM and VOV.
+fn run_line(result: &crate::run::RunResult, summary: &crate::output::summary::Summary) -> String {
+    let share = |s: f64| 100.0 * s / result.elapsed_s.max(1e-9);
+    format!(
+        "Stopped on {} after {:.3} s (set-up {:.3} s), {} photons, {} rays; direct light {:.3} s ({} replicates, {} shadow rays); statistics and forecasts {:.4} s = {:.3} % of the run; merging {:.4} s = {:.3} %; FOM {:.0} (stable: {}), VOV {:.4}.",
         result.stop_reason.as_str(),
         result.elapsed_s,
         result.setup.setup_s,
@@ -636,17 +721,20 @@ pub fn bench_accuracy(
         result.tallies.direct_replicates,
         result.tallies.direct_rays,
         result.stats_s,
-        100.0 * result.stats_s / result.elapsed_s.max(1e-9),
+        share(result.stats_s),
         result.merge_s,
-        100.0 * result.merge_s / result.elapsed_s.max(1e-9),
+        share(result.merge_s),
         summary.reliability.fom,
         summary.reliability.fom_stable,
         summary.reliability.vov,
-    );
-    let mut reached = Vec::new();
-    for goal in [0.05, 0.02, 0.01] {
-        let at = h.iter().find(|p| p.rel_error <= goal);
-        reached.push(match at {
+    )
+}
+
+/// When the error first reached 5, 2 and 1 %.
+fn times_to_accuracy(h: &[HistoryPoint]) -> String {
+    let reached: Vec<String> = [0.05, 0.02, 0.01]
+        .into_iter()
+        .map(|goal| match h.iter().find(|p| p.rel_error <= goal) {
             Some(p) => format!(
                 "{:.0} %: {:.3} s ({} photons)",
                 100.0 * goal,
@@ -654,29 +742,35 @@ pub fn bench_accuracy(
                 p.photons
             ),
             None => format!("{:.0} %: not reached", 100.0 * goal),
-        });
-    }
-    let _ = writeln!(out, "Time to accuracy: {}.\n", reached.join(", "));
-    if let (Some(last), Some(early)) = (
-        h.last(),
-        h.iter()
-            .find(|p| p.photons.saturating_mul(10) >= h.last().map_or(0, |l| l.photons)),
-    ) {
-        if let (Some(fs), Some(fp)) = (early.forecast_s, early.forecast_photons) {
-            let _ = writeln!(
-                out,
-                "Forecast made at {:.1} % of the photons ({:.3} s): {:.3} s and {} photons; actual {:.3} s and {} photons: time {:+.2} %, photons {:+.2} %.\n",
-                100.0 * early.photons as f64 / last.photons as f64,
-                early.elapsed_s,
-                fs,
-                fp,
-                last.elapsed_s,
-                last.photons,
-                100.0 * (fs / last.elapsed_s - 1.0),
-                100.0 * (fp as f64 / last.photons as f64 - 1.0),
-            );
-        }
-    }
+        })
+        .collect();
+    reached.join(", ")
+}
+
+/// The forecast made once 10 % of the photons were traced against what the run needed
+/// (`None` without history or without a forecast then).
+fn forecast_check(h: &[HistoryPoint]) -> Option<String> {
+    let last = h.last()?;
+    let early = h
+        .iter()
+        .find(|p| p.photons.saturating_mul(10) >= last.photons)?;
+    let (fs, fp) = (early.forecast_s?, early.forecast_photons?);
+    Some(format!(
+        "Forecast made at {:.1} % of the photons ({:.3} s): {:.3} s and {} photons; actual {:.3} s and {} photons: time {:+.2} %, photons {:+.2} %.",
+        100.0 * early.photons as f64 / last.photons as f64,
+        early.elapsed_s,
+        fs,
+        fp,
+        last.elapsed_s,
+        last.photons,
+        100.0 * (fs / last.elapsed_s - 1.0),
+        100.0 * (fp as f64 / last.photons as f64 - 1.0),
+    ))
+}
+
+/// The error-versus-time history with the forecasts made along the way (Markdown).
+fn history_table(h: &[HistoryPoint]) -> String {
+    let mut out = String::new();
     let _ = writeln!(
         out,
         "| elapsed s | photons | error % | forecast s | forecast photons |"
@@ -693,7 +787,7 @@ pub fn bench_accuracy(
             p.forecast_photons.map_or("–".into(), |f| f.to_string()),
         );
     }
-    Ok(out)
+    out
 }
 
 /// One configuration of `luxtally bench-scale`.
@@ -740,8 +834,18 @@ pub struct ScaleResult {
     pub triangles_traced: u64,
     /// Scene load (or generation) plus acceleration-structure build, wall seconds.
     pub setup_s: f64,
+    /// Of `setup_s`: the scene load or generation (with `Geometry`), and the BVH build.
+    pub load_s: f64,
+    pub bvh_s: f64,
+    /// CPU seconds (all threads, user + system) of the set-up: what it would take on
+    /// idle cores, whatever else the machine runs.
+    pub setup_cpu_s: f64,
     /// `VmHWM` at the end, MiB.
     pub peak_rss_mib: f64,
+    /// Peak RSS less the RSS before the scene was made, per triangle stored: geometry,
+    /// BVH (with its build's peak), triangle maps and the run's other per-triangle
+    /// buffers.
+    pub bytes_per_triangle: f64,
     /// Incoherent random closest-hit rays through the scene's bounds, wall time.
     pub mrays_per_s: f64,
     /// Photon pass (track estimator), wall time.
@@ -794,18 +898,61 @@ pub fn bench_scale_case(
     photons: u64,
     threads: usize,
 ) -> Result<ScaleResult> {
-    use crate::run::{run, RunOptions};
+    use crate::run::{run_from, RunOptions, Start};
     use crate::scene::Estimator;
     use std::sync::atomic::AtomicBool;
+    let (rss_before_mib, _) = memory_mib();
+    let cpu_before_s = process_cpu_seconds();
     let start = Instant::now();
     let scene = match case {
         ScaleCase::Instanced(n) => instanced_scene(mesh, n)?,
         ScaleCase::Flattened(n) => lit_scene("flattened", procedural_geometry(n as usize)),
     };
+    let load_s = start.elapsed().as_secs_f64();
     let backend = crate::accel::Backend::Embree;
     let caster = crate::accel::build(backend, &scene.geometry)?;
     let setup_s = start.elapsed().as_secs_f64();
+    let setup_cpu_s = process_cpu_seconds() - cpu_before_s;
     let g = &scene.geometry;
+    let mrays_per_s = scale_mrays(g, caster.as_ref(), threads)?;
+    let options = RunOptions {
+        threads,
+        backend,
+        estimator: Some(Estimator::Track),
+        ..RunOptions::with_photons(&scene, photons)
+    };
+    // The photon pass reuses the BVH (a second one would count in the peak RSS).
+    let result = run_from(
+        &scene,
+        &options,
+        caster.as_ref(),
+        Instant::now(),
+        &AtomicBool::new(false),
+        &mut (),
+        Start::default(),
+    )?;
+    let triangles_stored = g.triangle_count() as u64 + g.instanced.stored_triangle_count() as u64;
+    let peak_rss_mib = memory_mib().1;
+    Ok(ScaleResult {
+        case: case.to_string(),
+        instances: g.instanced.instances.len() as u64,
+        triangles_stored,
+        triangles_traced: g.triangle_count() as u64 + g.instanced.flattened_triangle_count(),
+        setup_s,
+        load_s,
+        bvh_s: setup_s - load_s,
+        setup_cpu_s,
+        peak_rss_mib,
+        bytes_per_triangle: (peak_rss_mib - rss_before_mib) * 1048576.0
+            / triangles_stored.max(1) as f64,
+        mrays_per_s,
+        photons_per_s: result.tallies.photons as f64 / result.elapsed_s,
+    })
+}
+
+/// Mrays/s of 200,000 incoherent closest-hit rays through the bounds of everything in
+/// `g` (instances included), on `threads` threads, best of 2.
+fn scale_mrays(g: &Geometry, caster: &dyn RayCaster, threads: usize) -> Result<f64> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
@@ -818,32 +965,14 @@ pub fn bench_scale_case(
         (lo.min(ilo), hi.max(ihi))
     };
     let chunks = split(&random_rays(lo, hi, 200_000, 7), CHUNK);
-    let mrays_per_s = rust_mrays(
-        caster.as_ref(),
+    Ok(rust_mrays(
+        caster,
         caster.default_intersect_api(),
         &chunks,
         false,
         Some(&pool),
         2,
-    );
-    let options = RunOptions {
-        threads,
-        backend,
-        estimator: Some(Estimator::Track),
-        ..RunOptions::with_photons(&scene, photons)
-    };
-    let result = run(&scene, &options, &AtomicBool::new(false), &mut ())?;
-    let instances = g.instanced.instances.len() as u64;
-    Ok(ScaleResult {
-        case: case.to_string(),
-        instances,
-        triangles_stored: g.triangle_count() as u64 + g.instanced.stored_triangle_count() as u64,
-        triangles_traced: g.triangle_count() as u64 + g.instanced.flattened_triangle_count(),
-        setup_s,
-        peak_rss_mib: memory_mib().1,
-        mrays_per_s,
-        photons_per_s: result.tallies.photons as f64 / result.elapsed_s,
-    })
+    ))
 }
 
 /// The bench-scale table (Markdown) from per-case results.
@@ -851,26 +980,31 @@ pub fn scale_table(results: &[ScaleResult], threads: usize) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "| case | instances | triangles stored | triangles traced | set-up s | peak RSS MiB | Mrays/s | photons/s |"
+        "| case | instances | triangles stored | triangles traced | set-up s (load + BVH) | set-up CPU s | peak RSS MiB | B/triangle | Mrays/s | photons/s |"
     );
-    let _ = writeln!(out, "|---|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(out, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for r in results {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {:.3e} | {:.2} | {:.0} | {:.2} | {:.2} M |",
+            "| {} | {} | {} | {:.3e} | {:.2} ({:.2} + {:.2}) | {:.2} | {:.0} | {:.0} | {:.2} | {:.2} M |",
             r.case,
             r.instances,
             r.triangles_stored,
             r.triangles_traced as f64,
             r.setup_s,
+            r.load_s,
+            r.bvh_s,
+            r.setup_cpu_s,
             r.peak_rss_mib,
+            r.bytes_per_triangle,
             r.mrays_per_s,
             r.photons_per_s / 1e6
         );
     }
     let _ = writeln!(
         out,
-        "\nEmbree, {threads} threads; one process per case (peak RSS = its VmHWM); rays: 200,000 \
+        "\nEmbree, {threads} threads; one process per case (peak RSS = its VmHWM; B/triangle = its \
+         growth from before the scene was made, per triangle stored); rays: 200,000 \
          incoherent random closest-hit rays through the bounds; photons: track estimator."
     );
     out

@@ -103,7 +103,7 @@ struct SavedTallies {
     rays: u64,
     killed_by_bounce_cap: u64,
     history_hits: [u128; 4],
-    triangle_hits: Vec<u64>,
+    triangle_hits: crate::tally::TriangleCounts,
     /// The cells, packed by [`pack_cells`].
     cells: Bytes,
     direct_replicates: u64,
@@ -629,9 +629,7 @@ fn fold_shard(
     for (a, b) in tallies.history_hits.iter_mut().zip(t.history_hits) {
         *a += b;
     }
-    for (a, b) in tallies.triangle_hits.iter_mut().zip(&t.triangle_hits) {
-        *a += b;
-    }
+    tallies.triangle_hits.add(&t.triangle_hits);
     let mut direct_s = 0.0;
     for record in &c.chunks {
         record.to_chunk(chunk);

@@ -25,15 +25,23 @@ use crate::{Error, Result};
 use std::mem::size_of;
 use std::path::Path;
 
-/// Geometry and BVH per triangle with Embree (bytes): the scene's own arrays, Embree's
-/// copy and BVH (build quality medium) and the per-triangle outputs (scene_map.ply,
-/// indirect_map.bin). Measured: runs of 4 and 8 spheres of subdivision 8 (5.2 M and
-/// 10.5 M triangles) peaked at 1.04 and 1.99 GiB RSS: 190 bytes per triangle, less the
-/// triangle maps' 64.
-pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE: f64 = 126.0;
+/// Geometry and BVH per triangle with Embree (bytes): the scene's own arrays (which
+/// Embree reads in place), Embree's BVH (build quality medium, with its build's peak)
+/// and the per-triangle outputs (scene_map.ply, the checkpoint's copy of the triangle
+/// maps). Measured: runs of 4 and 8 spheres of subdivision 8 (5.2 M and 10.5 M
+/// triangles, 100,000 photons) peaked at 0.81 and 1.59 GiB RSS: 159 bytes per triangle,
+/// less the triangle maps' 32.
+pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE: f64 = 127.0;
+
+/// The same from `accel::embree::COMPACT_BVH_TRIANGLES` mapped triangles on, where the
+/// BVH is compact: the same runs with the compact BVH peaked at 0.66 and 1.32 GiB, 136
+/// bytes per triangle, less the maps' 32.
+pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE_COMPACT: f64 = 104.0;
 
 /// The same with obvhs (its CWBVH build holds more while it builds): 3.20 and 1.61 GiB
-/// for the same scenes, 324 bytes per triangle, less the triangle maps' 64.
+/// for the same scenes, 324 bytes per triangle, less the triangle maps' 64 (measured
+/// when the maps and the checkpoint's copy of them counted in u64: an overestimate by
+/// about 32 bytes since).
 pub const GEOMETRY_BYTES_PER_TRIANGLE_OBVHS: f64 = 260.0;
 
 /// Outputs per receiver cell at their peak (bytes): summary.json (the summary, its
@@ -170,6 +178,9 @@ impl Estimate {
 /// Geometry, BVH and triangle maps of `triangles` triangles.
 pub fn geometry_estimate(triangles: u64, backend: Backend) -> Estimate {
     let per_triangle = match backend {
+        Backend::Embree if crate::accel::embree::compact_bvh(triangles as usize) => {
+            GEOMETRY_BYTES_PER_TRIANGLE_EMBREE_COMPACT
+        }
         Backend::Embree => GEOMETRY_BYTES_PER_TRIANGLE_EMBREE,
         Backend::Obvhs => GEOMETRY_BYTES_PER_TRIANGLE_OBVHS,
     };
@@ -186,7 +197,8 @@ pub fn geometry_estimate(triangles: u64, backend: Backend) -> Estimate {
     e.push(
         format!("triangle map: {triangles} triangles × {CODES_PER_TRIANGLE} slots"),
         "of tallies",
-        n * (CODES_PER_TRIANGLE * size_of::<u64>()) as f64,
+        // u32 counts (`tally::TriangleCounts`; u64 only past 4.3·10⁹ hits in a slot).
+        n * (CODES_PER_TRIANGLE * size_of::<u32>()) as f64,
     );
     e
 }

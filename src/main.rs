@@ -456,8 +456,12 @@ fn write_outputs(
     save_summary(out, &state)?;
     luxtally::output::write_run_files_with(out, &state, outputs)?;
     if outputs.indirect {
-        IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
-            .save(&out.join(MAP_FILE), scene)?;
+        IndirectMap::save_from_tallies(
+            &out.join(MAP_FILE),
+            scene,
+            &result.tallies,
+            result.setup.total_flux_lm,
+        )?;
     }
     Ok(())
 }

@@ -214,7 +214,7 @@ fn absurd_camera_is_refused_before_the_photon_pass() {
 fn scene_of_many_fine_spheres_is_refused_before_it_is_tessellated() {
     let dir = temp_dir("spheres");
     let out = dir.join("out");
-    // 16 spheres of 1.3 M triangles: 21 M triangles, 2.6 GB of geometry and BVH.
+    // 16 spheres of 1.3 M triangles: 21 M triangles, 2.2 GB of geometry and (compact) BVH.
     let scene = spheres(&dir, 16, 8);
     for command in ["run", "render"] {
         assert_refused(

@@ -9,7 +9,7 @@
 //! without normalising) and traverses the prototype's BVH.
 
 use super::{HitBatch, RayApi, RayBatch, RayCaster, INSTANCE_HIT};
-use crate::scene::Geometry;
+use crate::scene::{Geometry, Shared};
 use glam::{Affine3A, DAffine3, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::{
@@ -177,8 +177,8 @@ struct TwoLevel {
 /// An obvhs CWBVH over one `Geometry`.
 pub struct ObvhsScene {
     flat: Blas,
-    /// Unit normals per global triangle id.
-    normals: Vec<Vec3>,
+    /// Unit normals per global triangle id (the geometry's own array).
+    normals: Shared<Vec3>,
     two_level: TwoLevel,
 }
 

@@ -26,23 +26,26 @@ pub struct IndirectMap {
 impl IndirectMap {
     /// The map of a finished photon pass.
     pub fn from_tallies(scene: &Scene, tallies: &Tallies, total_flux_lm: f64) -> IndirectMap {
-        let areas = &scene.geometry.area_m2;
-        let face = |k: usize, back: bool| {
-            triangle_face_illuminance_lx(
-                tallies,
-                MapKind::Indirect,
-                k,
-                areas[k],
-                total_flux_lm,
-                back,
-            )
-        };
         IndirectMap {
-            face_lx: (0..areas.len())
-                .map(|k| [face(k, false), face(k, true)])
-                .collect(),
+            face_lx: faces_of(scene, tallies, total_flux_lm).collect(),
             photons: tallies.photons,
         }
+    }
+
+    /// Writes the map of a finished photon pass straight from its tallies, face by face
+    /// (the file [`IndirectMap::from_tallies`] then [`IndirectMap::save`] would write,
+    /// without the map in memory).
+    pub fn save_from_tallies(
+        path: &Path,
+        scene: &Scene,
+        tallies: &Tallies,
+        total_flux_lm: f64,
+    ) -> Result<()> {
+        let faces = faces_of(scene, tallies, total_flux_lm);
+        let count = scene.geometry.triangle_count();
+        crate::output::write_atomic_with(path, |w| {
+            write_map(w, scene, count, tallies.photons, faces)
+        })
     }
 
     /// A map of zeros (direct light only).
@@ -56,21 +59,10 @@ impl IndirectMap {
     /// Writes the map: magic, then little-endian u64 triangle count, scene fingerprint
     /// and photons, then f64 front and back illuminance per triangle.
     pub fn save(&self, path: &Path, scene: &Scene) -> Result<()> {
-        let mut bytes = Vec::with_capacity(HEADER_BYTES + 16 * self.face_lx.len());
-        bytes.extend_from_slice(MAGIC);
-        for x in [
-            self.face_lx.len() as u64,
-            scene_fingerprint(scene),
-            self.photons,
-        ] {
-            bytes.extend_from_slice(&x.to_le_bytes());
-        }
-        for face in &self.face_lx {
-            for e in face {
-                bytes.extend_from_slice(&e.to_le_bytes());
-            }
-        }
-        crate::output::write_atomic(path, &bytes)
+        let faces = self.face_lx.iter().copied();
+        crate::output::write_atomic_with(path, |w| {
+            write_map(w, scene, self.face_lx.len(), self.photons, faces)
+        })
     }
 
     /// Reads a map saved for `scene`; a map of another scene (other geometry, materials
@@ -111,6 +103,39 @@ impl IndirectMap {
             photons,
         })
     }
+}
+
+/// Indirect illuminance `[front, back]` (lx) of every triangle, from the tallies.
+fn faces_of<'a>(
+    scene: &'a Scene,
+    tallies: &'a Tallies,
+    total_flux_lm: f64,
+) -> impl Iterator<Item = [f64; 2]> + 'a {
+    let areas = &scene.geometry.area_m2;
+    let face = move |k: usize, back: bool| {
+        triangle_face_illuminance_lx(tallies, MapKind::Indirect, k, areas[k], total_flux_lm, back)
+    };
+    (0..areas.len()).map(move |k| [face(k, false), face(k, true)])
+}
+
+/// The file format of [`IndirectMap::save`], written to `w`.
+fn write_map(
+    w: &mut impl std::io::Write,
+    scene: &Scene,
+    count: usize,
+    photons: u64,
+    faces: impl Iterator<Item = [f64; 2]>,
+) -> std::io::Result<()> {
+    w.write_all(MAGIC)?;
+    for x in [count as u64, scene_fingerprint(scene), photons] {
+        w.write_all(&x.to_le_bytes())?;
+    }
+    for face in faces {
+        for e in face {
+            w.write_all(&e.to_le_bytes())?;
+        }
+    }
+    Ok(())
 }
 
 /// FNV-1a over what the map depends on: geometry (vertices, triangles, their materials,

@@ -75,21 +75,76 @@ impl Material {
 pub struct Geometry {
     /// World position of the local frame's origin (centre of the scene's bounds).
     pub origin: DVec3,
-    /// Vertex positions, local frame.
-    pub vertices: Vec<Vec3>,
-    /// Triangles as vertex indices.
-    pub triangles: Vec<[u32; 3]>,
+    /// Vertex positions, local frame (shared with Embree, which reads them in place).
+    pub vertices: Shared<Vec3>,
+    /// Triangles as vertex indices (shared with Embree).
+    pub triangles: Shared<[u32; 3]>,
     /// Material index (into `Scene::materials`) per triangle.
     pub material: Vec<u32>,
     /// Triangle area in m², computed in f64 from world coordinates.
     pub area_m2: Vec<f64>,
-    /// Unit geometric normal per triangle, (v1 − v0) × (v2 − v0) orientation.
-    pub normal: Vec<Vec3>,
+    /// Unit geometric normal per triangle, (v1 − v0) × (v2 − v0) orientation (shared
+    /// with the obvhs backend).
+    pub normal: Shared<Vec3>,
     /// Index of the `[[objects]]` entry each triangle came from.
     pub object: Vec<u32>,
     /// Objects without a map (`map = false`): shared meshes placed by transforms, traced
     /// but never tallied. Empty for scenes that map everything.
     pub instanced: Instanced,
+}
+
+/// A read-only array that a ray-casting backend may hold without copying it (Embree
+/// reads the scene's vertices and triangles in place): clones share the array, and
+/// writing through one first copies the array if anything else still holds it, so what
+/// a backend holds never changes under it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shared<T>(Arc<Vec<T>>);
+
+impl<T> Shared<T> {
+    /// Holds `items` with room for one more element after the last: Embree reads vertex
+    /// buffers with 16-byte loads, 4 bytes past the last 12-byte vertex.
+    pub fn padded(mut items: Vec<T>) -> Shared<T> {
+        items.reserve_exact(1);
+        Shared(Arc::new(items))
+    }
+
+    /// The array, for a backend to keep alive while it reads it in place.
+    pub fn arc(&self) -> &Arc<Vec<T>> {
+        &self.0
+    }
+}
+
+impl<T> Default for Shared<T> {
+    fn default() -> Self {
+        Shared(Arc::new(Vec::new()))
+    }
+}
+
+impl<T> From<Vec<T>> for Shared<T> {
+    fn from(items: Vec<T>) -> Self {
+        Shared(Arc::new(items))
+    }
+}
+
+impl<T> std::ops::Deref for Shared<T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        &self.0
+    }
+}
+
+impl<T: Clone> std::ops::DerefMut for Shared<T> {
+    fn deref_mut(&mut self) -> &mut [T] {
+        Arc::make_mut(&mut self.0).as_mut_slice()
+    }
+}
+
+impl<'a, T> IntoIterator for &'a Shared<T> {
+    type Item = &'a T;
+    type IntoIter = std::slice::Iter<'a, T>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.0.iter()
+    }
 }
 
 /// A mesh shared by instances, in its own frame (centred on its bounds, so f32 keeps
@@ -408,42 +463,132 @@ impl Geometry {
         prototypes: &[PrototypeMesh],
         placements: &[Placement],
     ) -> Geometry {
-        let mut bounds: Option<(DVec3, DVec3)> = None;
-        let mut grow = |p: DVec3| {
-            bounds = Some(match bounds {
-                None => (p, p),
-                Some((lo, hi)) => (lo.min(p), hi.max(p)),
-            })
-        };
-        vertices.iter().for_each(|v| grow(*v));
-        // Each prototype centred on its own bounds: (f32 vertices, centre, f64 bounds).
-        let mut protos = Vec::with_capacity(prototypes.len());
-        let mut centres = Vec::with_capacity(prototypes.len());
-        for pm in prototypes {
-            let (proto, centre) = Prototype::centred(pm);
-            protos.push(proto);
-            centres.push(centre);
-        }
+        let mut bounds = Bounds::default();
+        vertices.iter().for_each(|v| bounds.grow(*v));
+        // Each prototype centred on its own bounds (f32 vertices), and its centre.
+        let (protos, centres): (Vec<Prototype>, Vec<DVec3>) =
+            prototypes.iter().map(Prototype::centred).unzip();
         let placed: Vec<(&Placement, DAffine3)> = placements
             .iter()
             .filter(|pl| !protos[pl.prototype as usize].triangles.is_empty())
             .map(|pl| {
                 let full = pl.world * DAffine3::from_translation(centres[pl.prototype as usize]);
-                let (lo, hi) = protos[pl.prototype as usize].bounds;
-                for k in 0..8 {
-                    let corner = DVec3::new(
-                        if k & 1 == 0 { lo.x } else { hi.x } as f64,
-                        if k & 2 == 0 { lo.y } else { hi.y } as f64,
-                        if k & 4 == 0 { lo.z } else { hi.z } as f64,
-                    );
-                    grow(full.transform_point3(corner));
+                for corner in box_corners(protos[pl.prototype as usize].bounds) {
+                    bounds.grow(full.transform_point3(corner));
                 }
                 (pl, full)
             })
             .collect();
-        let origin = bounds.map_or(DVec3::ZERO, |(lo, hi)| (lo + hi) * 0.5);
+        let origin = bounds.centre();
+        let mut g = Geometry {
+            origin,
+            vertices: Shared::padded(local_vertices(vertices, origin)),
+            instanced: Instanced::place(protos, &placed, origin),
+            ..Geometry::default()
+        };
+        g.set_mapped_triangles(vertices, triangles, material, object);
+        g
+    }
+
+    /// Stores the triangles of nonzero area with their material, object, area (f64, from
+    /// the world-space `vertices`) and unit normal; areas and normals are computed in
+    /// parallel (each alone, so the values do not depend on the threads).
+    fn set_mapped_triangles(
+        &mut self,
+        vertices: &[DVec3],
+        triangles: &[[u32; 3]],
+        material: &[u32],
+        object: &[u32],
+    ) {
+        use rayon::prelude::*;
+        let n = triangles.len();
+        let mut area_m2 = vec![0.0f64; n];
+        let mut normal = vec![Vec3::ZERO; n];
+        (
+            area_m2.par_iter_mut(),
+            normal.par_iter_mut(),
+            triangles.par_iter(),
+        )
+            .into_par_iter()
+            .for_each(|(area, normal, tri)| {
+                let [a, b, c] = tri.map(|i| vertices[i as usize]);
+                let cross = (b - a).cross(c - a);
+                *area = 0.5 * cross.length();
+                if *area > 0.0 {
+                    *normal = (cross / (2.0 * *area)).as_vec3();
+                }
+            });
+        let keep = |k: &usize| area_m2[*k] > 0.0;
+        if (0..n).all(|k| keep(&k)) {
+            self.triangles = triangles.to_vec().into();
+            self.material = material.to_vec();
+            self.object = object.to_vec();
+            self.area_m2 = area_m2;
+            self.normal = normal.into();
+            return;
+        }
+        // Triangles of zero (or NaN) area can never be hit and have no illuminance.
+        let kept: Vec<usize> = (0..n).filter(keep).collect();
+        self.triangles = kept
+            .iter()
+            .map(|&k| triangles[k])
+            .collect::<Vec<_>>()
+            .into();
+        self.material = kept.iter().map(|&k| material[k]).collect();
+        self.object = kept.iter().map(|&k| object[k]).collect();
+        self.area_m2 = kept.iter().map(|&k| area_m2[k]).collect();
+        self.normal = kept.iter().map(|&k| normal[k]).collect::<Vec<_>>().into();
+    }
+}
+
+/// World-space vertices in the local frame at `origin`, with room for one more (see
+/// [`Shared::padded`]: no reallocation there).
+fn local_vertices(vertices: &[DVec3], origin: DVec3) -> Vec<Vec3> {
+    let mut local = Vec::with_capacity(vertices.len() + 1);
+    local.extend(vertices.iter().map(|v| (*v - origin).as_vec3()));
+    local
+}
+
+/// A growing axis-aligned box (empty until the first point).
+#[derive(Default)]
+struct Bounds(Option<(DVec3, DVec3)>);
+
+impl Bounds {
+    fn grow(&mut self, p: DVec3) {
+        self.0 = Some(match self.0 {
+            None => (p, p),
+            Some((lo, hi)) => (lo.min(p), hi.max(p)),
+        });
+    }
+
+    /// The centre of the box (the origin when empty).
+    fn centre(&self) -> DVec3 {
+        self.0.map_or(DVec3::ZERO, |(lo, hi)| (lo + hi) * 0.5)
+    }
+}
+
+/// The 8 corners of an f32 box, in f64.
+fn box_corners((lo, hi): (Vec3, Vec3)) -> impl Iterator<Item = DVec3> {
+    (0..8).map(move |k| {
+        DVec3::new(
+            if k & 1 == 0 { lo.x } else { hi.x } as f64,
+            if k & 2 == 0 { lo.y } else { hi.y } as f64,
+            if k & 4 == 0 { lo.z } else { hi.z } as f64,
+        )
+    })
+}
+
+impl Instanced {
+    /// The instances of `placed` (placement, prototype frame → world) over `prototypes`,
+    /// their transforms made relative to the local frame at `origin` in f64 before
+    /// rounding, and the bounds of all of them.
+    fn place(
+        prototypes: Vec<Prototype>,
+        placed: &[(&Placement, DAffine3)],
+        origin: DVec3,
+    ) -> Instanced {
         let mut instanced = Instanced {
-            prototypes: protos,
+            prototypes,
             instances: Vec::with_capacity(placed.len()),
             bounds: (Vec3::ZERO, Vec3::ZERO),
         };
@@ -457,13 +602,7 @@ impl Geometry {
             for (k, c) in cols.iter().enumerate() {
                 to_local[3 * k..3 * k + 3].copy_from_slice(&c.as_vec3().to_array());
             }
-            let (lo, hi) = instanced.prototypes[pl.prototype as usize].bounds;
-            for k in 0..8 {
-                let corner = DVec3::new(
-                    if k & 1 == 0 { lo.x } else { hi.x } as f64,
-                    if k & 2 == 0 { lo.y } else { hi.y } as f64,
-                    if k & 4 == 0 { lo.z } else { hi.z } as f64,
-                );
+            for corner in box_corners(instanced.prototypes[pl.prototype as usize].bounds) {
                 let p = full.transform_point3(corner) - origin;
                 ilo = ilo.min(p);
                 ihi = ihi.max(p);
@@ -482,26 +621,7 @@ impl Geometry {
                 (ihi + DVec3::splat(pad(ihi))).as_vec3(),
             );
         }
-        let mut g = Geometry {
-            origin,
-            vertices: vertices.iter().map(|v| (*v - origin).as_vec3()).collect(),
-            instanced,
-            ..Geometry::default()
-        };
-        for (k, tri) in triangles.iter().enumerate() {
-            let [a, b, c] = tri.map(|i| vertices[i as usize]);
-            let cross = (b - a).cross(c - a);
-            let area = 0.5 * cross.length();
-            if !(area > 0.0) {
-                continue;
-            }
-            g.triangles.push(*tri);
-            g.material.push(material[k]);
-            g.object.push(object[k]);
-            g.area_m2.push(area);
-            g.normal.push((cross / (2.0 * area)).as_vec3());
-        }
-        g
+        instanced
     }
 }
 

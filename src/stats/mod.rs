@@ -4,7 +4,7 @@
 pub mod forecast;
 pub mod stop;
 
-use crate::tally::{CellSums, Counts, Slot, Tallies, CODES_PER_TRIANGLE};
+use crate::tally::{CellSums, Counts, Slot, Tallies};
 
 /// Relative error reported for a value of 0 whose σ is known: 100 %, so no relative
 /// target can be met by a quantity nothing has reached.
@@ -252,7 +252,7 @@ pub fn triangle_illuminance_lx(
 ) -> f64 {
     let (n_odd, n_even) = t.odd_even_photons();
     let slots = t.triangle_slots(k);
-    let (odd, even) = parity_counts(slots, kind);
+    let (odd, even) = parity_counts(&slots, kind);
     let (count, photons) = match parity {
         None => (odd + even, n_odd + n_even),
         Some(true) => (odd, n_odd),
@@ -317,11 +317,8 @@ pub fn map_stats(t: &Tallies, kind: MapKind, areas_m2: &[f64], total_flux_lm: f6
         0.0
     };
     let (mut sum_e, mut sum_e2, mut sum_d2) = (0.0, 0.0, 0.0);
-    for (&a, slots) in areas_m2
-        .iter()
-        .zip(t.triangle_hits.chunks_exact(CODES_PER_TRIANGLE))
-    {
-        let (odd, even) = parity_counts(slots, kind);
+    for (k, &a) in areas_m2.iter().enumerate() {
+        let (odd, even) = parity_counts(&t.triangle_slots(k), kind);
         let e = per_photon * (odd + even) as f64 / a;
         sum_e += a * e;
         sum_e2 += a * e * e;

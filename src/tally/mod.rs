@@ -108,8 +108,137 @@ impl Slot {
 impl Tallies {
     /// Triangle `k`'s photon counts, one per [`Slot`].
     #[inline]
-    pub fn triangle_slots(&self, k: usize) -> &[u64] {
-        &self.triangle_hits[k * CODES_PER_TRIANGLE..(k + 1) * CODES_PER_TRIANGLE]
+    pub fn triangle_slots(&self, k: usize) -> [u64; CODES_PER_TRIANGLE] {
+        self.triangle_hits.slots(k)
+    }
+}
+
+/// Photon counts per triangle slot, held as u32 (half the memory of the triangle maps,
+/// which dominate it in large scenes) until one count would pass u32::MAX, then as u64
+/// from that moment on: exact either way.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TriangleCounts {
+    Narrow(Vec<u32>),
+    Wide(Vec<u64>),
+}
+
+impl Default for TriangleCounts {
+    fn default() -> Self {
+        TriangleCounts::Narrow(Vec::new())
+    }
+}
+
+impl TriangleCounts {
+    /// `n` zero counts (the zeroed pages are only touched where photons land).
+    pub fn zeros(n: usize) -> TriangleCounts {
+        TriangleCounts::Narrow(vec![0; n])
+    }
+
+    pub fn len(&self) -> usize {
+        match self {
+            TriangleCounts::Narrow(v) => v.len(),
+            TriangleCounts::Wide(v) => v.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Count `i`.
+    #[inline]
+    pub fn get(&self, i: usize) -> u64 {
+        match self {
+            TriangleCounts::Narrow(v) => v[i] as u64,
+            TriangleCounts::Wide(v) => v[i],
+        }
+    }
+
+    /// Adds one to count `i`.
+    #[inline]
+    pub fn increment(&mut self, i: usize) {
+        self.add_at(i, 1);
+    }
+
+    /// Adds `n` to count `i`, widening every count first if it would not fit in u32.
+    #[inline]
+    pub fn add_at(&mut self, i: usize, n: u64) {
+        if let TriangleCounts::Narrow(v) = self {
+            match u32::try_from(v[i] as u64 + n) {
+                Ok(sum) => {
+                    v[i] = sum;
+                    return;
+                }
+                Err(_) => self.widen(),
+            }
+        }
+        if let TriangleCounts::Wide(v) = self {
+            v[i] += n;
+        }
+    }
+
+    /// Switches to u64 counts.
+    #[cold]
+    fn widen(&mut self) {
+        if let TriangleCounts::Narrow(v) = self {
+            *self = TriangleCounts::Wide(v.iter().map(|&c| c as u64).collect());
+        }
+    }
+
+    /// Adds `other` count by count (integers: any order gives the same sums).
+    pub fn add(&mut self, other: &TriangleCounts) {
+        for i in 0..self.len().min(other.len()) {
+            let n = other.get(i);
+            if n > 0 {
+                self.add_at(i, n);
+            }
+        }
+    }
+
+    /// Triangle `k`'s [`CODES_PER_TRIANGLE`] counts.
+    #[inline]
+    pub fn slots(&self, k: usize) -> [u64; CODES_PER_TRIANGLE] {
+        let range = k * CODES_PER_TRIANGLE..(k + 1) * CODES_PER_TRIANGLE;
+        match self {
+            TriangleCounts::Narrow(v) => {
+                let s = &v[range];
+                std::array::from_fn(|i| s[i] as u64)
+            }
+            TriangleCounts::Wide(v) => {
+                let s = &v[range];
+                std::array::from_fn(|i| s[i])
+            }
+        }
+    }
+
+    /// Every count as u64 (checkpoints).
+    pub fn to_vec(&self) -> Vec<u64> {
+        (0..self.len()).map(|i| self.get(i)).collect()
+    }
+}
+
+/// Saved as the sequence of u64 counts, so the bytes are those of a `Vec<u64>`
+/// whichever width the counts are held in.
+impl serde::Serialize for TriangleCounts {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_seq((0..self.len()).map(|i| self.get(i)))
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for TriangleCounts {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        Vec::<u64>::deserialize(deserializer).map(TriangleCounts::from)
+    }
+}
+
+impl From<Vec<u64>> for TriangleCounts {
+    /// Narrow when every count fits in u32.
+    fn from(counts: Vec<u64>) -> Self {
+        if counts.iter().all(|&c| c <= u32::MAX as u64) {
+            TriangleCounts::Narrow(counts.iter().map(|&c| c as u32).collect())
+        } else {
+            TriangleCounts::Wide(counts)
+        }
     }
 }
 
@@ -206,7 +335,7 @@ pub struct Tallies {
     /// keeps Σk⁴ exact over any run.
     pub history_hits: [u128; 4],
     /// Photon hits per triangle and [`deposit_code`] slot.
-    pub triangle_hits: Vec<u64>,
+    pub triangle_hits: TriangleCounts,
     /// One entry per cell of every receiver, receivers in scene order.
     pub cells: Vec<CellSums>,
     /// Direct-light replicates added to every next-event receiver's cells so far, and
@@ -229,7 +358,7 @@ pub struct Counts {
 impl Tallies {
     pub fn new(triangles: usize, cells: usize) -> Tallies {
         Tallies {
-            triangle_hits: vec![0; triangles * CODES_PER_TRIANGLE],
+            triangle_hits: TriangleCounts::zeros(triangles * CODES_PER_TRIANGLE),
             cells: vec![CellSums::default(); cells],
             ..Tallies::default()
         }
@@ -244,7 +373,7 @@ impl Tallies {
             *total += part as u128;
         }
         for &code in &chunk.deposits {
-            self.triangle_hits[code as usize] += 1;
+            self.triangle_hits.increment(code as usize);
         }
         for p in &chunk.scores {
             self.cells[p.cell as usize].add(p);
@@ -287,6 +416,27 @@ mod tests {
         }
         let exact = 0.1 * n as f64;
         assert!(((s.value() - exact) / exact).abs() < 1e-12, "{}", s.value());
+    }
+
+    #[test]
+    fn triangle_counts_widen_exactly_past_u32() {
+        let mut c = TriangleCounts::zeros(3);
+        c.add_at(1, u32::MAX as u64 - 1);
+        c.increment(1);
+        assert!(matches!(c, TriangleCounts::Narrow(_)));
+        c.increment(1);
+        c.increment(2);
+        assert!(matches!(c, TriangleCounts::Wide(_)));
+        assert_eq!(c.to_vec(), vec![0, u32::MAX as u64 + 1, 1]);
+        let mut d = TriangleCounts::zeros(3);
+        d.add(&c);
+        d.add(&c);
+        assert_eq!(d.to_vec(), vec![0, 2 * (u32::MAX as u64 + 1), 2]);
+        assert_eq!(TriangleCounts::from(d.to_vec()), d);
+        assert_eq!(
+            TriangleCounts::from(vec![5, 6]),
+            TriangleCounts::Narrow(vec![5, 6])
+        );
     }
 
     #[test]
