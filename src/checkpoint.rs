@@ -86,14 +86,32 @@ impl Numbers {
     }
 }
 
-/// A history point as saved (postcard cannot skip fields).
+/// A history point as saved: [`HistoryPoint`]'s fields in order (postcard cannot skip
+/// fields, and summary.json's serde attributes skip some).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-struct SavedPoint {
-    elapsed_s: f64,
-    photons: u64,
-    rel_error: f64,
-    forecast_s: Option<f64>,
-    forecast_photons: Option<u64>,
+struct SavedPoint(f64, u64, f64, Option<f64>, Option<u64>);
+
+impl SavedPoint {
+    fn saved(p: &HistoryPoint) -> SavedPoint {
+        SavedPoint(
+            p.elapsed_s,
+            p.photons,
+            p.rel_error,
+            p.forecast_s,
+            p.forecast_photons,
+        )
+    }
+
+    fn point(&self) -> HistoryPoint {
+        let SavedPoint(elapsed_s, photons, rel_error, forecast_s, forecast_photons) = *self;
+        HistoryPoint {
+            elapsed_s,
+            photons,
+            rel_error,
+            forecast_s,
+            forecast_photons,
+        }
+    }
 }
 
 /// [`Tallies`] as saved: every compensated sum as (sum, compensation).
@@ -292,17 +310,7 @@ impl Checkpoint {
                 .is_some_and(|r| r != StopReason::Interrupted),
             tallies,
             direct_per_photon: state.resumable.direct_per_photon,
-            history: state
-                .history
-                .iter()
-                .map(|p| SavedPoint {
-                    elapsed_s: p.elapsed_s,
-                    photons: p.photons,
-                    rel_error: p.rel_error,
-                    forecast_s: p.forecast_s,
-                    forecast_photons: p.forecast_photons,
-                })
-                .collect(),
+            history: state.history.iter().map(SavedPoint::saved).collect(),
             times_s: [
                 state.elapsed_s,
                 state.stats_s,
@@ -323,17 +331,7 @@ impl Checkpoint {
     pub fn resumed(&self) -> Option<Resumed> {
         Some(Resumed {
             tallies: self.tallies.tallies()?,
-            history: self
-                .history
-                .iter()
-                .map(|p| HistoryPoint {
-                    elapsed_s: p.elapsed_s,
-                    photons: p.photons,
-                    rel_error: p.rel_error,
-                    forecast_s: p.forecast_s,
-                    forecast_photons: p.forecast_photons,
-                })
-                .collect(),
+            history: self.history.iter().map(SavedPoint::point).collect(),
             direct_per_photon: self.direct_per_photon,
             elapsed_s: self.times_s[0],
             stats_s: self.times_s[1],

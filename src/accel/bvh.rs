@@ -358,25 +358,15 @@ impl RayCaster for ObvhsScene {
                 let (t, u, v) = self.flat.barycentrics(k, &ray, t_hit);
                 let id = self.flat.bvh.primitive_indices[k];
                 let n = self.normals.get(id as usize).copied().unwrap_or(Vec3::ZERO);
-                hits.t[i] = t * DIR_SCALE;
                 hits.tri[i] = id;
-                hits.u[i] = u;
-                hits.v[i] = v;
-                hits.ngx[i] = n.x;
-                hits.ngy[i] = n.y;
-                hits.ngz[i] = n.z;
+                hits.set_surface(i, t * DIR_SCALE, u, v, n.to_array());
                 ray.tmax = t_hit;
             }
             if let Some((inst, prim, t, u, v, n)) = self.two_level.closest(ray) {
-                hits.t[i] = t * DIR_SCALE;
                 hits.tri[i] = INSTANCE_HIT;
                 hits.inst[i] = inst;
                 hits.prim[i] = prim;
-                hits.u[i] = u;
-                hits.v[i] = v;
-                hits.ngx[i] = n.x;
-                hits.ngy[i] = n.y;
-                hits.ngz[i] = n.z;
+                hits.set_surface(i, t * DIR_SCALE, u, v, n.to_array());
             }
         }
     }

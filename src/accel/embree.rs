@@ -45,6 +45,28 @@ pub fn compact_bvh(triangles: usize) -> bool {
     triangles >= COMPACT_BVH_TRIANGLES
 }
 
+/// Feeds rays `0..n` to a stream call in chunks of [`STREAM_CHUNK`] records: `record(i)`
+/// builds record i, `call` casts a chunk, `read(i, record)` takes each result back.
+fn in_stream_chunks<T: Default + Copy>(
+    n: usize,
+    record: impl Fn(usize) -> T,
+    mut call: impl FnMut(&mut sys::RTCIntersectContext, &mut [T]),
+    mut read: impl FnMut(usize, &T),
+) {
+    let mut ctx = context();
+    let mut buf = [T::default(); STREAM_CHUNK];
+    for base in (0..n).step_by(STREAM_CHUNK) {
+        let chunk = &mut buf[..(n - base).min(STREAM_CHUNK)];
+        for (k, r) in chunk.iter_mut().enumerate() {
+            *r = record(base + k);
+        }
+        call(&mut ctx, chunk);
+        for (k, r) in chunk.iter().enumerate() {
+            read(base + k, r);
+        }
+    }
+}
+
 /// Where the device error callback leaves its message; read after every build call.
 type ErrorSlot = Mutex<Option<String>>;
 
@@ -480,12 +502,7 @@ fn store_hit(
         }
     }
     let inv = 1.0 / (ng[0] * ng[0] + ng[1] * ng[1] + ng[2] * ng[2]).sqrt();
-    hits.t[i] = tfar;
-    hits.u[i] = u;
-    hits.v[i] = v;
-    hits.ngx[i] = ng[0] * inv;
-    hits.ngy[i] = ng[1] * inv;
-    hits.ngz[i] = ng[2] * inv;
+    hits.set_surface(i, tfar, u, v, ng.map(|c| c * inv));
 }
 
 /// One ray of the batch in Embree's single-ray layout.
@@ -640,43 +657,29 @@ impl RayCaster for EmbreeScene {
                     rtcIntersect16
                 )
             }
-            RayApi::Stream => {
-                let mut ctx = context();
-                let mut buf = [sys::RTCRayHit::default(); STREAM_CHUNK];
-                let mut base = 0;
-                while base < n {
-                    let m = (n - base).min(STREAM_CHUNK);
-                    for (k, rh) in buf[..m].iter_mut().enumerate() {
-                        *rh = rayhit1(rays, base + k);
-                    }
-                    // SAFETY: committed scene; `buf` holds `m` initialised records with
-                    // the stated stride.
+            RayApi::Stream => in_stream_chunks(
+                n,
+                |i| rayhit1(rays, i),
+                |ctx, buf| {
+                    // SAFETY: committed scene; `buf` holds initialised records with the
+                    // stated stride.
                     unsafe {
                         sys::rtcIntersect1M(
                             self.scene,
-                            &mut ctx,
+                            ctx,
                             buf.as_mut_ptr(),
-                            m as u32,
+                            buf.len() as u32,
                             std::mem::size_of::<sys::RTCRayHit>(),
                         )
-                    };
-                    for (k, rh) in buf[..m].iter().enumerate() {
-                        let h = &rh.hit;
-                        let ng = [h.Ng_x, h.Ng_y, h.Ng_z];
-                        store_hit(
-                            hits,
-                            &self.normal_maps,
-                            base + k,
-                            rh.ray.tfar,
-                            (h.geomID, h.instID[0], h.primID),
-                            h.u,
-                            h.v,
-                            ng,
-                        );
                     }
-                    base += m;
-                }
-            }
+                },
+                |i, rh| {
+                    let h = &rh.hit;
+                    let ids = (h.geomID, h.instID[0], h.primID);
+                    let ng = [h.Ng_x, h.Ng_y, h.Ng_z];
+                    store_hit(hits, &self.normal_maps, i, rh.ray.tfar, ids, h.u, h.v, ng);
+                },
+            ),
         }
     }
 
@@ -708,32 +711,24 @@ impl RayCaster for EmbreeScene {
                     rtcOccluded16
                 )
             }
-            RayApi::Stream => {
-                let mut ctx = context();
-                let mut buf = [sys::RTCRay::default(); STREAM_CHUNK];
-                let mut base = 0;
-                while base < n {
-                    let m = (n - base).min(STREAM_CHUNK);
-                    for (k, r) in buf[..m].iter_mut().enumerate() {
-                        *r = ray1(rays, base + k);
-                    }
-                    // SAFETY: committed scene; `buf` holds `m` initialised rays with the
+            RayApi::Stream => in_stream_chunks(
+                n,
+                |i| ray1(rays, i),
+                |ctx, buf| {
+                    // SAFETY: committed scene; `buf` holds initialised rays with the
                     // stated stride.
                     unsafe {
                         sys::rtcOccluded1M(
                             self.scene,
-                            &mut ctx,
+                            ctx,
                             buf.as_mut_ptr(),
-                            m as u32,
+                            buf.len() as u32,
                             std::mem::size_of::<sys::RTCRay>(),
                         )
-                    };
-                    for (k, r) in buf[..m].iter().enumerate() {
-                        occluded[base + k] = r.tfar == f32::NEG_INFINITY;
                     }
-                    base += m;
-                }
-            }
+                },
+                |i, r| occluded[i] = r.tfar == f32::NEG_INFINITY,
+            ),
         }
     }
 

@@ -109,6 +109,18 @@ pub struct HitBatch {
 }
 
 impl HitBatch {
+    /// Records where ray `i` hit: distance `t`, barycentrics `u`, `v`, unit normal `n`
+    /// (which triangle is the caller's: `tri`, `inst`, `prim`).
+    #[inline(always)]
+    pub fn set_surface(&mut self, i: usize, t: f32, u: f32, v: f32, n: [f32; 3]) {
+        self.t[i] = t;
+        self.u[i] = u;
+        self.v[i] = v;
+        self.ngx[i] = n[0];
+        self.ngy[i] = n[1];
+        self.ngz[i] = n[2];
+    }
+
     /// Resizes every array to `n` entries, marked as misses.
     pub fn reset(&mut self, n: usize) {
         self.t.clear();
