@@ -905,24 +905,7 @@ fn info_command(path: &Path) -> Result<()> {
         println!("  bounds {:.3?} → {:.3?}", lo.to_array(), hi.to_array());
     }
     for m in &scene.materials {
-        println!(
-            "  material {}: ρ {} τ {} mirror {} glass {} (ior {})",
-            m.name,
-            m.reflectance,
-            m.transmittance,
-            m.specular_reflectance,
-            m.specular_transmittance,
-            m.ior
-        );
-        if m.glossy_reflectance + m.glossy_transmittance > 0.0 {
-            println!(
-                "    glossy reflector {} rough glass {} (roughness {}, α {})",
-                m.glossy_reflectance,
-                m.glossy_transmittance,
-                m.roughness,
-                m.roughness * m.roughness
-            );
-        }
+        println!("  material {}: {}", m.name, m.describe());
     }
     for l in &scene.lights {
         println!("  {}: {}", l.label, l.kind.describe());

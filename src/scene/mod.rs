@@ -12,63 +12,13 @@ use std::sync::Arc;
 pub mod adjacency;
 pub mod file;
 mod load;
+mod material;
 pub mod mesh_io;
 pub mod shapes;
 
 pub use crate::light::Luminaire;
 pub use load::{load, load_str};
-
-/// A material: any mix of Lambertian reflection/transmission, ideal specular
-/// reflection/refraction and glossy (GGX microfacet) reflection/refraction
-/// (`trace::bsdf`). The fractions sum to at most 1; the rest is absorbed.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Material {
-    pub name: String,
-    /// Diffuse (Lambertian) reflectance ρ.
-    pub reflectance: f64,
-    /// Diffuse (Lambertian) transmittance τ.
-    pub transmittance: f64,
-    /// Ideal mirror reflectance.
-    pub specular_reflectance: f64,
-    /// Ideal refraction (dielectric of index `ior`, with Fresnel reflection at its face).
-    pub specular_transmittance: f64,
-    /// Index of refraction of the dielectric lobes (ideal and rough).
-    pub ior: f64,
-    /// Glossy reflector: a GGX lobe of this albedo weight (Fresnel factor 1).
-    pub glossy_reflectance: f64,
-    /// Rough dielectric (index `ior`, Fresnel reflection and refraction through GGX
-    /// microfacets) of this albedo weight.
-    pub glossy_transmittance: f64,
-    /// Perceptual roughness of the glossy lobes, in (0, 1]; GGX α = roughness².
-    pub roughness: f64,
-}
-
-impl Material {
-    /// A Lambertian reflector of reflectance `rho`.
-    pub fn lambertian(name: &str, rho: f64) -> Self {
-        Material {
-            name: name.to_string(),
-            reflectance: rho,
-            transmittance: 0.0,
-            specular_reflectance: 0.0,
-            specular_transmittance: 0.0,
-            ior: 1.5,
-            glossy_reflectance: 0.0,
-            glossy_transmittance: 0.0,
-            roughness: 1.0,
-        }
-    }
-
-    /// Total albedo: the fraction of incident flux that is not absorbed.
-    pub fn albedo(&self) -> f64 {
-        self.reflectance
-            + self.transmittance
-            + self.specular_reflectance
-            + self.specular_transmittance
-            + self.glossy_reflectance
-            + self.glossy_transmittance
-    }
-}
+pub use material::{Material, MaterialFile};
 
 /// All triangles of the scene in one indexed mesh, in the re-centred local frame.
 #[derive(Clone, Debug, Default)]

@@ -24,7 +24,7 @@ use crate::rng::photon_stream;
 use crate::sampling::{cosine_hemisphere, uniform};
 use crate::scene::{Estimator, Geometry, Scene};
 use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid, Tallies};
-use bsdf::{Bsdf, LobeKind};
+use bsdf::{Bsdf, LobeKind, Transport};
 use direct::DirectLight;
 use emit::Emitters;
 use glam::{DVec3, Vec3};
@@ -145,7 +145,7 @@ impl Lanes {
 /// What the photon pass needs of a material, looked up once per hit: the BSDF and the
 /// flags that decide its path through a bounce, so the common case (a grey Lambertian
 /// reflector) skips the general lobe roulette.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Surfacing {
     bsdf: Bsdf,
     /// Connected to next-event receivers ([`Bsdf::connectable`]).
@@ -159,18 +159,11 @@ struct Surfacing {
 
 impl Surfacing {
     fn new(bsdf: Bsdf) -> Surfacing {
-        let (_, tau) = bsdf.diffuse();
-        let (mirror, dielectric) = bsdf.specular();
-        let (glossy_r, glossy_t) = bsdf.glossy();
         Surfacing {
-            bsdf,
             connectable: bsdf.connectable(),
             glossy_connectable: bsdf.glossy_connectable(),
-            lambert_only: tau == 0.0
-                && mirror == 0.0
-                && dielectric == 0.0
-                && glossy_r == 0.0
-                && glossy_t == 0.0,
+            lambert_only: bsdf.lambert_only(),
+            bsdf,
         }
     }
 }
@@ -541,14 +534,9 @@ impl<'a> Tracer<'a> {
             }
             let cos_s = c.dir.dot(facing.as_dvec3());
             let side = if cos_s > 0.0 { facing } else { -facing };
-            // Intensity of the scattered photon towards the receiver point: Lambertian
-            // (written as ever, so diffuse scenes keep their bits) plus glossy.
-            let (rho, tau) = bsdf.diffuse();
-            let coefficient = if cos_s > 0.0 { rho } else { tau };
-            let mut intensity = flux * coefficient * cos_s.abs() * std::f64::consts::FRAC_1_PI;
-            if surfacing.glossy_connectable {
-                intensity += flux * bsdf.f_glossy(wo, c.dir, n) * cos_s.abs();
-            }
+            // Intensity of the scattered photon towards the receiver point: its
+            // connectable lobes' flux·f·|cos θ|.
+            let intensity = bsdf.f_cos(flux, wo, c.dir, n, cos_s, Transport::Importance, true);
             if intensity.is_nan() || intensity <= 0.0 {
                 continue;
             }
