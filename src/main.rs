@@ -549,17 +549,20 @@ fn merge_command(
     options.seed = numbers.seed;
     options.stop.photons = shards[0].1.photons_goal;
     options.backend = numbers.backend.parse()?;
+    // The checkpoint keeps the estimator's Debug spelling (`NextEvent`).
     options.estimator = match numbers.estimator.as_deref() {
         None => None,
-        Some("Track") => Some(Estimator::Track),
-        Some("NextEvent") => Some(Estimator::NextEvent),
-        Some("Auto") => Some(Estimator::Auto),
-        Some(other) => {
-            return Err(Error::input(
-                shards[0].0.display().to_string(),
-                format!("unknown estimator `{other}`"),
-            ))
-        }
+        Some(name) => Some(
+            Estimator::ALL
+                .into_iter()
+                .find(|e| format!("{e:?}") == name)
+                .ok_or_else(|| {
+                    Error::input(
+                        shards[0].0.display().to_string(),
+                        format!("unknown estimator `{name}`"),
+                    )
+                })?,
+        ),
     };
     if let Some(t) = threads {
         options.threads = t.max(1);
@@ -1073,15 +1076,15 @@ fn bench_rays_command(path: &Path, rays: usize, threads: Option<usize>) -> Resul
 }
 
 fn parse_estimator(name: &str) -> Result<Estimator> {
-    match name {
-        "track" => Ok(Estimator::Track),
-        "next_event" => Ok(Estimator::NextEvent),
-        "auto" => Ok(Estimator::Auto),
-        other => Err(Error::input(
+    Estimator::from_name(name).ok_or_else(|| {
+        Error::input(
             "--estimator",
-            format!("unknown estimator `{other}` (expected track, next_event or auto)"),
-        )),
-    }
+            format!(
+                "unknown estimator `{name}` (expected {})",
+                Estimator::expected()
+            ),
+        )
+    })
 }
 
 fn all_cores() -> usize {

@@ -231,7 +231,11 @@ pub enum Quantity {
     },
 }
 
-/// How a receiver is scored (`estimator = "track" | "next_event" | "auto"`).
+/// How a receiver is scored (`estimator = "track" | "next_event" | "auto"`): its name
+/// (scene file, `--estimator`, summary.json) and what it does, in one place. The photon
+/// pass (`trace`), the direct light's schedule (`run`) and the summary only ask the
+/// methods below, so an estimator that combines these behaviours differently is a
+/// variant, its name and its answers here.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Estimator {
@@ -243,6 +247,9 @@ pub enum Estimator {
 }
 
 impl Estimator {
+    /// Every estimator, in the order messages list them.
+    pub const ALL: [Estimator; 3] = [Estimator::Track, Estimator::NextEvent, Estimator::Auto];
+
     /// What a receiver is scored by: `auto` is next-event estimation (sampled direct
     /// light wherever a source reaches, connections where diffuse paths exist, crossings
     /// for what neither can score).
@@ -253,12 +260,55 @@ impl Estimator {
         }
     }
 
-    /// As in the scene file and summary.json.
+    /// As in the scene file and summary.json (serde reads the same snake_case names).
     pub fn name(self) -> &'static str {
         match self {
             Estimator::Track => "track",
             Estimator::NextEvent => "next_event",
             Estimator::Auto => "auto",
+        }
+    }
+
+    /// The estimator called `name` (`--estimator`).
+    pub fn from_name(name: &str) -> Option<Estimator> {
+        Estimator::ALL.into_iter().find(|e| e.name() == name)
+    }
+
+    /// The names, for messages: "track, next_event or auto".
+    pub fn expected() -> String {
+        let names: Vec<&str> = Estimator::ALL.iter().map(|e| e.name()).collect();
+        let (last, rest) = names.split_last().expect("at least one estimator");
+        format!("{} or {last}", rest.join(", "))
+    }
+
+    /// The direct light (photons' first segments) is sampled as independent replicates
+    /// (`trace::direct`, scheduled by `run`) instead of scored by crossing.
+    pub fn direct_by_replicates(self) -> bool {
+        matches!(self, Estimator::NextEvent)
+    }
+
+    /// Diffuse and connectable glossy vertices are connected to the receiver by shadow
+    /// rays beyond its near zone, and their segments no longer score by crossing there.
+    /// Segments leaving specular vertices always score by crossing.
+    pub fn connects(self) -> bool {
+        matches!(self, Estimator::NextEvent)
+    }
+
+    /// summary.json's `direct_estimator`.
+    pub fn direct_name(self) -> &'static str {
+        if self.direct_by_replicates() {
+            "sampled"
+        } else {
+            "track"
+        }
+    }
+
+    /// summary.json's `indirect_estimator`.
+    pub fn indirect_name(self) -> &'static str {
+        if self.connects() {
+            "next_event"
+        } else {
+            "track"
         }
     }
 }

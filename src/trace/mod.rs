@@ -313,7 +313,7 @@ impl<'a> Tracer<'a> {
         let (dx, dy, dz) = (&mut rays.dx[..n], &mut rays.dy[..n], &mut rays.dz[..n]);
         let (offsets, bounces) = (&mut lanes.offset[..n], &mut lanes.bounces[..n]);
         let (segments, rngs) = (&mut lanes.segment[..n], &mut lanes.rng[..n]);
-        let any_next_event = self.receivers.iter().any(|r| r.next_event());
+        let any_next_event = self.receivers.iter().any(|r| r.estimator.connects());
         // Diffuse survivors whose direction pass 3 samples. Written for every
         // Lambertian hit and kept by advancing `m`, so the roulette is no branch.
         if s.diffuse.len() < n {
@@ -476,7 +476,7 @@ impl<'a> Tracer<'a> {
         let slack = self.receiver_slack;
         r.mark_crossings([ox, oy, oz], [dx, dy, dz], t_hit, slack, marks);
         let (offsets, segments) = (&lanes.offset[..n], &lanes.segment[..n]);
-        let next_event = r.next_event();
+        let (replicates, connects) = (r.estimator.direct_by_replicates(), r.estimator.connects());
         for k in marks.iter().enumerate().filter(|m| *m.1).map(|m| m.0) {
             let origin = DVec3::new(ox[k] as f64, oy[k] as f64, oz[k] as f64);
             let dir = DVec3::new(dx[k] as f64, dy[k] as f64, dz[k] as f64);
@@ -484,12 +484,11 @@ impl<'a> Tracer<'a> {
             let Some(c) = r.crossing(origin, dir, -slack, t_reach) else {
                 continue;
             };
-            let scores = !next_event
-                || match segments[k] {
-                    Segment::Emitted => false,
-                    Segment::Specular => true,
-                    Segment::Diffuse => c.distance < r.near_zone_m,
-                };
+            let scores = match segments[k] {
+                Segment::Emitted => !replicates,
+                Segment::Specular => true,
+                Segment::Diffuse => !connects || c.distance < r.near_zone_m,
+            };
             if scores {
                 pending.push((offsets[k], c.cell, c.score_per_lm * flux));
             }
@@ -521,7 +520,7 @@ impl<'a> Tracer<'a> {
         for (r, stratum) in self
             .receivers
             .iter()
-            .filter(|r| r.next_event())
+            .filter(|r| r.estimator.connects())
             .flat_map(|r| (0..r.connections).map(move |s| (r, s)))
         {
             let Some(c) = r.connect(p.as_dvec3(), stratum, rng) else {
