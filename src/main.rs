@@ -553,17 +553,20 @@ fn merge_command(
     options.seed = numbers.seed;
     options.stop.photons = shards[0].1.photons_goal;
     options.backend = numbers.backend.parse()?;
+    // The checkpoint keeps the estimator's Debug spelling (`NextEvent`).
     options.estimator = match numbers.estimator.as_deref() {
         None => None,
-        Some("Track") => Some(Estimator::Track),
-        Some("NextEvent") => Some(Estimator::NextEvent),
-        Some("Auto") => Some(Estimator::Auto),
-        Some(other) => {
-            return Err(Error::input(
-                shards[0].0.display().to_string(),
-                format!("unknown estimator `{other}`"),
-            ))
-        }
+        Some(name) => Some(
+            Estimator::ALL
+                .into_iter()
+                .find(|e| format!("{e:?}") == name)
+                .ok_or_else(|| {
+                    Error::input(
+                        shards[0].0.display().to_string(),
+                        format!("unknown estimator `{name}`"),
+                    )
+                })?,
+        ),
     };
     if let Some(t) = threads {
         options.threads = t.max(1);
@@ -909,24 +912,7 @@ fn info_command(path: &Path) -> Result<()> {
         println!("  bounds {:.3?} → {:.3?}", lo.to_array(), hi.to_array());
     }
     for m in &scene.materials {
-        println!(
-            "  material {}: ρ {} τ {} mirror {} glass {} (ior {})",
-            m.name,
-            m.reflectance,
-            m.transmittance,
-            m.specular_reflectance,
-            m.specular_transmittance,
-            m.ior
-        );
-        if m.glossy_reflectance + m.glossy_transmittance > 0.0 {
-            println!(
-                "    glossy reflector {} rough glass {} (roughness {}, α {})",
-                m.glossy_reflectance,
-                m.glossy_transmittance,
-                m.roughness,
-                m.roughness * m.roughness
-            );
-        }
+        println!("  material {}: {}", m.name, m.describe());
     }
     for l in &scene.lights {
         println!("  {}: {}", l.label, l.kind.describe());
@@ -1094,15 +1080,15 @@ fn bench_rays_command(path: &Path, rays: usize, threads: Option<usize>) -> Resul
 }
 
 fn parse_estimator(name: &str) -> Result<Estimator> {
-    match name {
-        "track" => Ok(Estimator::Track),
-        "next_event" => Ok(Estimator::NextEvent),
-        "auto" => Ok(Estimator::Auto),
-        other => Err(Error::input(
+    Estimator::from_name(name).ok_or_else(|| {
+        Error::input(
             "--estimator",
-            format!("unknown estimator `{other}` (expected track, next_event or auto)"),
-        )),
-    }
+            format!(
+                "unknown estimator `{name}` (expected {})",
+                Estimator::expected()
+            ),
+        )
+    })
 }
 
 fn all_cores() -> usize {

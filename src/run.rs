@@ -284,7 +284,12 @@ impl<'s> Engine<'s> {
         }
         let start = Instant::now();
         let direct = self.tracer.direct_light();
-        for grid in self.tracer.receivers.iter().filter(|g| g.next_event()) {
+        for grid in self
+            .tracer
+            .receivers
+            .iter()
+            .filter(|g| g.estimator.direct_by_replicates())
+        {
             let cells = &mut tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
             tallies.direct_rays += self
                 .pool
@@ -297,7 +302,12 @@ impl<'s> Engine<'s> {
     /// The direct light's replicates per photon, from the tallies at a schedule point.
     fn schedule_direct(&self, tallies: &Tallies) -> DirectSchedule {
         let (mut a, mut b) = (0.0, 0.0);
-        for grid in self.tracer.receivers.iter().filter(|g| g.next_event()) {
+        for grid in self
+            .tracer
+            .receivers
+            .iter()
+            .filter(|g| g.estimator.direct_by_replicates())
+        {
             let cells = &tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
             let (ga, gb) = relative_variances(cells, tallies.photons, tallies.direct_replicates);
             (a, b) = (a + ga, b + gb);

@@ -238,7 +238,6 @@ pub fn build(state: &RunState<'_>) -> Summary {
 fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> ReceiverSummary {
     let t = state.tallies;
     let r = &state.scene.receivers[index];
-    let next_event = estimator == Estimator::NextEvent;
     let cells = t.receiver_cells(&state.scene.receivers, index);
     let stats = receiver_stats(cells, t.counts());
     let direct: Vec<(f64, f64)> = cells
@@ -265,8 +264,8 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
         quantity: quantity.into(),
         unit: unit.into(),
         estimator: estimator.name().into(),
-        direct_estimator: if next_event { "sampled" } else { "track" }.into(),
-        indirect_estimator: if next_event { "next_event" } else { "track" }.into(),
+        direct_estimator: estimator.direct_name().into(),
+        indirect_estimator: estimator.indirect_name().into(),
         direct: direct.iter().map(|d| d.0).collect(),
         direct_sigma: direct.iter().map(|d| d.1).collect(),
         cells: r.cells,

@@ -9,13 +9,12 @@ use super::map::IndirectField;
 use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng::photon_stream;
 use crate::sampling::uniform;
-use crate::scene::{Camera, Material, Scene};
-use crate::trace::bsdf::{fr_dielectric, Bsdf};
+use crate::scene::{Camera, Scene};
+use crate::trace::bsdf::{Bsdf, Incidence, LobeKind, Transport};
 use crate::trace::emit::Emitters;
-use crate::trace::scatter::{offset_origin, reflect, refract};
+use crate::trace::scatter::offset_origin;
 use glam::{DVec3, Vec3};
 use rand_pcg::Pcg32;
-use std::f64::consts::PI;
 
 /// Pixels per work item: enough rays per batch for Embree's streams, small enough to
 /// share the image among threads.
@@ -123,13 +122,8 @@ struct Path {
 /// Where an eye path meets a surface, as the eye sees it.
 struct Vertex<'a> {
     p: Vec3,
-    /// The ray's unit direction, the geometric normal and the normal on the eye's side.
-    dir: DVec3,
-    n: DVec3,
-    facing: DVec3,
-    /// The eye sees the triangle's back.
-    back: bool,
-    m: &'a Material,
+    /// The ray's direction, the normals, the side the eye sees.
+    inc: Incidence,
     bsdf: &'a Bsdf,
     path: Path,
     /// The random stream of (tile, depth, ray) for what is sampled here.
@@ -292,28 +286,18 @@ impl<'a> EyePass<'a> {
         let Some(surface) = s.hits.surface(k, &self.scene.geometry) else {
             return;
         };
-        let n = surface.normal.as_dvec3();
-        let back = dir.dot(n) > 0.0;
         let at = Vertex {
             p: surface.point,
-            dir,
-            n,
-            // Normal on the eye's side.
-            facing: if back { -n } else { n },
-            back,
-            m: &self.scene.materials[surface.material as usize],
+            inc: Incidence::new(dir, surface.normal.as_dvec3()),
             bsdf: &self.bsdfs[surface.material as usize],
             path,
             stream,
         };
-        let (glossy_r, glossy_t) = at.bsdf.glossy();
-        let diffuse = at.m.reflectance > 0.0 || at.m.transmittance > 0.0;
-        let glossy = glossy_r + glossy_t > 0.0;
         if let Some(t) = surface.mapped {
             let uv = (s.hits.u[k], s.hits.v[k]);
             self.add_map_light(&at, t as usize, uv, may_continue, l);
         }
-        if diffuse || glossy {
+        if at.bsdf.has(LobeKind::Diffuse) || at.bsdf.has(LobeKind::Glossy) {
             self.queue_direct(&at, s);
         }
         if may_continue {
@@ -322,9 +306,8 @@ impl<'a> EyePass<'a> {
     }
 
     /// Adds the indirect light read from the map at triangle `t` (unmapped, instanced
-    /// objects have none: direct light only): the Lambertian parts', and at the depth
-    /// limit the glossy lobes' as if they were Lambertian of the same weights (the
-    /// rough dielectric split by Fresnel at the viewing angle).
+    /// objects have none: direct light only), through the lobes' `eye_indirect`: the
+    /// Lambertian parts', and at the depth limit the glossy lobes'.
     fn add_map_light(
         &self,
         at: &Vertex,
@@ -333,105 +316,62 @@ impl<'a> EyePass<'a> {
         may_continue: bool,
         l: &mut f64,
     ) {
-        let (m, weight) = (at.m, at.path.weight);
-        let e_seen = || self.field.illuminance_lx(t, at.back, u, v);
-        let e_other = || self.field.illuminance_lx(t, !at.back, u, v);
-        if m.reflectance > 0.0 || m.transmittance > 0.0 {
-            *l += weight * (m.reflectance * e_seen() + m.transmittance * e_other()) / PI;
-        }
-        let (glossy_r, glossy_t) = at.bsdf.glossy();
-        if glossy_r + glossy_t > 0.0 && !may_continue {
-            let (e_seen, e_other) = (e_seen(), e_other());
-            let r = fr_dielectric(-at.dir.dot(at.n), at.bsdf.ior());
-            *l += weight * (glossy_r * e_seen + glossy_t * (r * e_seen + (1.0 - r) * e_other)) / PI;
-        }
+        let back = at.inc.back;
+        let e_seen = || self.field.illuminance_lx(t, back, u, v);
+        let e_other = || self.field.illuminance_lx(t, !back, u, v);
+        at.bsdf
+            .eye_indirect(l, at.path.weight, &at.inc, &e_seen, &e_other, !may_continue);
     }
 
-    /// Queues the rays that go on from `at`: mirror reflection, Fresnel glass's
-    /// reflection and refraction, and one sampled direction per glossy lobe.
+    /// Queues the rays that go on from `at`, as its lobes continue them
+    /// (`Lobe::eye_continue`: mirror reflection, Fresnel glass's reflection and
+    /// refraction, one sampled direction per glossy lobe, from a stream of (tile, depth,
+    /// ray) like the area-source pattern).
     fn continue_path(&self, at: &Vertex, s: &mut Scratch) {
-        let (m, bsdf, weight, dir, facing) = (at.m, at.bsdf, at.path.weight, at.dir, at.facing);
-        let push_path = |s: &mut Scratch, d: DVec3, w: f64, leave: DVec3, counted: bool| {
-            if w < MIN_WEIGHT {
-                return;
-            }
-            let origin = offset_origin(at.p, leave.as_vec3(), self.scene_scale);
-            s.next_rays.push(
-                origin.to_array(),
-                d.as_vec3().to_array(),
-                0.0,
-                f32::INFINITY,
-            );
-            s.next_paths.push(Path {
-                sample: at.path.sample,
-                weight: w,
-                lights_counted: counted,
+        let facing = at.inc.facing;
+        let new_rng = || photon_stream(self.seed ^ 0x5a5a_0000_5a5a_0000, at.stream);
+        at.bsdf
+            .eye_continue(at.path.weight, &at.inc, &new_rng, &mut |c| {
+                if c.weight < MIN_WEIGHT {
+                    return;
+                }
+                let leave = if c.transmitted { -facing } else { facing };
+                let origin = offset_origin(at.p, leave.as_vec3(), self.scene_scale);
+                s.next_rays.push(
+                    origin.to_array(),
+                    c.dir.as_vec3().to_array(),
+                    0.0,
+                    f32::INFINITY,
+                );
+                s.next_paths.push(Path {
+                    sample: at.path.sample,
+                    weight: c.weight,
+                    lights_counted: c.lights_counted,
+                });
             });
-        };
-        let push =
-            |s: &mut Scratch, d: DVec3, w: f64, leave: DVec3| push_path(s, d, w, leave, false);
-        if m.specular_reflectance > 0.0 {
-            push(
-                s,
-                reflect(dir, facing),
-                weight * m.specular_reflectance,
-                facing,
-            );
-        }
-        if m.specular_transmittance > 0.0 {
-            // The dielectric's outside is the side the normal points to.
-            let eta = if at.back { m.ior } else { 1.0 / m.ior };
-            let w = weight * m.specular_transmittance;
-            match refract(dir, facing, eta) {
-                Some((refracted, fresnel)) => {
-                    push(s, reflect(dir, facing), w * fresnel, facing);
-                    push(s, refracted, w * (1.0 - fresnel), -facing);
-                }
-                None => push(s, reflect(dir, facing), w, facing),
-            }
-        }
-        let (glossy_r, glossy_t) = bsdf.glossy();
-        if glossy_r + glossy_t > 0.0 {
-            // One sampled direction per glossy lobe, weight f·|cos|/pdf, from a stream of
-            // (tile, depth, ray) like the area-source pattern.
-            let mut rng = photon_stream(self.seed ^ 0x5a5a_0000_5a5a_0000, at.stream);
-            let wo = -dir;
-            if glossy_r > 0.0 {
-                let u = [uniform(&mut rng), uniform(&mut rng)];
-                if let Some(smp) = bsdf.sample_glossy_reflection(wo, at.n, u) {
-                    push_path(s, smp.dir, weight * glossy_r * smp.weight, facing, true);
-                }
-            }
-            if glossy_t > 0.0 {
-                let u = [uniform(&mut rng), uniform(&mut rng), uniform(&mut rng)];
-                if let Some(smp) = bsdf.sample_rough_dielectric(wo, at.n, u) {
-                    let leave = if smp.transmitted { -facing } else { facing };
-                    push_path(s, smp.dir, weight * glossy_t * smp.weight, leave, true);
-                }
-            }
-        }
     }
 
     /// Queues the shadow rays of the direct term at `at` (eqs. 1–2): each carries the
-    /// luminance it adds, ρ/π·E on the eye's side or τ/π·E from the other side, plus
-    /// the glossy lobes' f(wo, ω_light)·E (`wo` towards the eye).
+    /// luminance it adds, f(wo, ω_light)·|cos|·E summed over the finite lobes (ρ/π·E on
+    /// the eye's side or τ/π·E from the other side for a Lambertian one; `wo` towards
+    /// the eye).
     fn queue_direct(&self, at: &Vertex, s: &mut Scratch) {
-        let (p, normal, facing, wo, m, bsdf) = (at.p, at.n, at.facing, -at.dir, at.m, at.bsdf);
+        let (p, normal, facing, wo, bsdf) = (at.p, at.inc.n, at.inc.facing, -at.inc.dir, at.bsdf);
         let (weight, sample, stream) = (at.path.weight, at.path.sample, at.stream);
         let pd = p.as_dvec3();
-        let (glossy_r, glossy_t) = bsdf.glossy();
-        let glossy = glossy_r + glossy_t > 0.0;
         // Luminance per lux arriving from direction `to_light` (unit).
         let gain = |to_light: DVec3| -> (f64, DVec3) {
             let cos = to_light.dot(facing);
-            let (mut g, side) = if cos >= 0.0 {
-                (weight * m.reflectance * cos / PI, facing)
-            } else {
-                (weight * m.transmittance * -cos / PI, -facing)
-            };
-            if glossy {
-                g += weight * bsdf.f_glossy(wo, to_light, normal) * cos.abs();
-            }
+            let side = if cos >= 0.0 { facing } else { -facing };
+            let g = bsdf.f_cos(
+                weight,
+                wo,
+                to_light,
+                normal,
+                cos,
+                Transport::Radiance,
+                false,
+            );
             (g, side)
         };
         let push = |s: &mut Scratch, leave: DVec3, to: DVec3, tfar: f32, l: f64| {

@@ -3,6 +3,7 @@
 //! the key path, `objects[2].radius`, through `serde_path_to_error`). Nothing here checks
 //! physics; `load` validates and converts.
 
+pub use super::material::MaterialFile;
 use super::shapes;
 use super::Estimator;
 use crate::error::{Error, Result};
@@ -27,31 +28,6 @@ pub struct SceneFile {
     pub receivers: Vec<ReceiverFile>,
     pub simulation: Option<toml::Value>,
     pub camera: Option<CameraFile>,
-}
-
-#[derive(Deserialize, Debug)]
-#[serde(deny_unknown_fields)]
-pub struct MaterialFile {
-    #[serde(default)]
-    pub reflectance: f64,
-    #[serde(default)]
-    pub transmittance: f64,
-    #[serde(default)]
-    pub specular_reflectance: f64,
-    #[serde(default)]
-    pub specular_transmittance: f64,
-    #[serde(default = "default_ior")]
-    pub ior: f64,
-    #[serde(default)]
-    pub glossy_reflectance: f64,
-    #[serde(default)]
-    pub glossy_transmittance: f64,
-    /// Required when a glossy part is set.
-    pub roughness: Option<f64>,
-}
-
-fn default_ior() -> f64 {
-    1.5
 }
 
 /// `scale = 2` or `scale = [1, 2, 1]`.

@@ -6,8 +6,8 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::file::{
-    self, CameraFile, InstanceFile, MaterialFile, ObjectEntry, ObjectFile, QuantityName,
-    ReceiverFile, ScaleFile, ShapeFile, Source,
+    self, CameraFile, InstanceFile, ObjectEntry, ObjectFile, QuantityName, ReceiverFile, ScaleFile,
+    ShapeFile, Source,
 };
 use super::mesh_io;
 use super::shapes::{self, Mesh, Transform};
@@ -47,7 +47,7 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
     let mut materials = raw
         .materials
         .into_iter()
-        .map(|(key, m)| material(key, m, origin))
+        .map(|(key, m)| Material::from_entry(key, m, origin))
         .collect::<Result<Vec<_>>>()?;
     let mut builder = GeometryBuilder::default();
     for (i, value) in raw.objects.into_iter().enumerate() {
@@ -81,30 +81,6 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
     })
 }
 
-/// `[materials.KEY]`, validated.
-fn material(key: String, m: MaterialFile, origin: &str) -> Result<Material> {
-    let at = format!("{origin}: materials.{key}");
-    if m.roughness.is_none() && m.glossy_reflectance + m.glossy_transmittance > 0.0 {
-        return Err(Error::input(
-            format!("{at}.roughness"),
-            "required with glossy_reflectance or glossy_transmittance",
-        ));
-    }
-    let material = Material {
-        name: key,
-        reflectance: m.reflectance,
-        transmittance: m.transmittance,
-        specular_reflectance: m.specular_reflectance,
-        specular_transmittance: m.specular_transmittance,
-        ior: m.ior,
-        glossy_reflectance: m.glossy_reflectance,
-        glossy_transmittance: m.glossy_transmittance,
-        roughness: m.roughness.unwrap_or(1.0),
-    };
-    validate_material(&material, &at)?;
-    Ok(material)
-}
-
 /// The `[[lights]]` entries, each read by its kind (`crate::light`).
 fn lights(entries: Vec<toml::Value>, origin: &str, base_dir: &Path) -> Result<Vec<Light>> {
     let mut lights = Vec::new();
@@ -133,50 +109,6 @@ fn receivers(entries: Vec<ReceiverFile>, origin: &str) -> Result<Vec<Receiver>> 
         receivers.push(receiver);
     }
     Ok(receivers)
-}
-
-/// Every fraction finite and ≥ 0, `ior` ≥ 1, roughness in (0, 1], and no energy
-/// created.
-fn validate_material(m: &Material, at: &str) -> Result<()> {
-    let parts = [
-        ("reflectance", m.reflectance),
-        ("transmittance", m.transmittance),
-        ("specular_reflectance", m.specular_reflectance),
-        ("specular_transmittance", m.specular_transmittance),
-        ("glossy_reflectance", m.glossy_reflectance),
-        ("glossy_transmittance", m.glossy_transmittance),
-    ];
-    for (key, x) in parts {
-        if !x.is_finite() || x < 0.0 {
-            return Err(Error::input(
-                format!("{at}.{key}"),
-                format!("must be a number ≥ 0, got {x}"),
-            ));
-        }
-    }
-    if !m.ior.is_finite() || m.ior < 1.0 {
-        return Err(Error::input(
-            format!("{at}.ior"),
-            format!("must be ≥ 1, got {}", m.ior),
-        ));
-    }
-    if !(m.roughness > 0.0 && m.roughness <= 1.0) {
-        return Err(Error::input(
-            format!("{at}.roughness"),
-            format!("must be in (0, 1], got {}", m.roughness),
-        ));
-    }
-    // A little slack so that fractions written in decimal (0.7 + 0.2 + 0.1) sum to 1.
-    let total = m.albedo();
-    if total > 1.0 + 1e-9 {
-        // Rounded so that 0.8 + 0.4 reads 1.2, not 1.2000000000000002.
-        let total = (total * 1e9).round() / 1e9;
-        return Err(Error::input(
-            at,
-            format!("energy-creating material: reflectance + transmittance + specular and glossy parts = {total} > 1"),
-        ));
-    }
-    Ok(())
 }
 
 /// Mapped triangles are tallied with 8 deposit codes each in a `u32`
@@ -590,7 +522,7 @@ fn file_materials(
                     ..Material::lambertian(&name, fm.reflectance)
                 };
                 if !fm.reflectance.is_nan() {
-                    validate_material(&material, &format!("{at}.file: material `{}`", fm.name))?;
+                    material.validate(&format!("{at}.file: material `{}`", fm.name))?;
                 }
                 materials.push(material);
                 (materials.len() - 1) as u32

@@ -12,63 +12,13 @@ use std::sync::Arc;
 pub mod adjacency;
 pub mod file;
 mod load;
+mod material;
 pub mod mesh_io;
 pub mod shapes;
 
 pub use crate::light::Luminaire;
 pub use load::{load, load_str};
-
-/// A material: any mix of Lambertian reflection/transmission, ideal specular
-/// reflection/refraction and glossy (GGX microfacet) reflection/refraction
-/// (`trace::bsdf`). The fractions sum to at most 1; the rest is absorbed.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Material {
-    pub name: String,
-    /// Diffuse (Lambertian) reflectance ρ.
-    pub reflectance: f64,
-    /// Diffuse (Lambertian) transmittance τ.
-    pub transmittance: f64,
-    /// Ideal mirror reflectance.
-    pub specular_reflectance: f64,
-    /// Ideal refraction (dielectric of index `ior`, with Fresnel reflection at its face).
-    pub specular_transmittance: f64,
-    /// Index of refraction of the dielectric lobes (ideal and rough).
-    pub ior: f64,
-    /// Glossy reflector: a GGX lobe of this albedo weight (Fresnel factor 1).
-    pub glossy_reflectance: f64,
-    /// Rough dielectric (index `ior`, Fresnel reflection and refraction through GGX
-    /// microfacets) of this albedo weight.
-    pub glossy_transmittance: f64,
-    /// Perceptual roughness of the glossy lobes, in (0, 1]; GGX α = roughness².
-    pub roughness: f64,
-}
-
-impl Material {
-    /// A Lambertian reflector of reflectance `rho`.
-    pub fn lambertian(name: &str, rho: f64) -> Self {
-        Material {
-            name: name.to_string(),
-            reflectance: rho,
-            transmittance: 0.0,
-            specular_reflectance: 0.0,
-            specular_transmittance: 0.0,
-            ior: 1.5,
-            glossy_reflectance: 0.0,
-            glossy_transmittance: 0.0,
-            roughness: 1.0,
-        }
-    }
-
-    /// Total albedo: the fraction of incident flux that is not absorbed.
-    pub fn albedo(&self) -> f64 {
-        self.reflectance
-            + self.transmittance
-            + self.specular_reflectance
-            + self.specular_transmittance
-            + self.glossy_reflectance
-            + self.glossy_transmittance
-    }
-}
+pub use material::{Material, MaterialFile};
 
 /// All triangles of the scene in one indexed mesh, in the re-centred local frame.
 #[derive(Clone, Debug, Default)]
@@ -336,7 +286,11 @@ pub enum Quantity {
     },
 }
 
-/// How a receiver is scored (`estimator = "track" | "next_event" | "auto"`).
+/// How a receiver is scored (`estimator = "track" | "next_event" | "auto"`): its name
+/// (scene file, `--estimator`, summary.json) and what it does, in one place. The photon
+/// pass (`trace`), the direct light's schedule (`run`) and the summary only ask the
+/// methods below, so an estimator that combines these behaviours differently is a
+/// variant, its name and its answers here.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Estimator {
@@ -348,6 +302,9 @@ pub enum Estimator {
 }
 
 impl Estimator {
+    /// Every estimator, in the order messages list them.
+    pub const ALL: [Estimator; 3] = [Estimator::Track, Estimator::NextEvent, Estimator::Auto];
+
     /// What a receiver is scored by: `auto` is next-event estimation (sampled direct
     /// light wherever a source reaches, connections where diffuse paths exist, crossings
     /// for what neither can score).
@@ -358,12 +315,55 @@ impl Estimator {
         }
     }
 
-    /// As in the scene file and summary.json.
+    /// As in the scene file and summary.json (serde reads the same snake_case names).
     pub fn name(self) -> &'static str {
         match self {
             Estimator::Track => "track",
             Estimator::NextEvent => "next_event",
             Estimator::Auto => "auto",
+        }
+    }
+
+    /// The estimator called `name` (`--estimator`).
+    pub fn from_name(name: &str) -> Option<Estimator> {
+        Estimator::ALL.into_iter().find(|e| e.name() == name)
+    }
+
+    /// The names, for messages: "track, next_event or auto".
+    pub fn expected() -> String {
+        let names: Vec<&str> = Estimator::ALL.iter().map(|e| e.name()).collect();
+        let (last, rest) = names.split_last().expect("at least one estimator");
+        format!("{} or {last}", rest.join(", "))
+    }
+
+    /// The direct light (photons' first segments) is sampled as independent replicates
+    /// (`trace::direct`, scheduled by `run`) instead of scored by crossing.
+    pub fn direct_by_replicates(self) -> bool {
+        matches!(self, Estimator::NextEvent)
+    }
+
+    /// Diffuse and connectable glossy vertices are connected to the receiver by shadow
+    /// rays beyond its near zone, and their segments no longer score by crossing there.
+    /// Segments leaving specular vertices always score by crossing.
+    pub fn connects(self) -> bool {
+        matches!(self, Estimator::NextEvent)
+    }
+
+    /// summary.json's `direct_estimator`.
+    pub fn direct_name(self) -> &'static str {
+        if self.direct_by_replicates() {
+            "sampled"
+        } else {
+            "track"
+        }
+    }
+
+    /// summary.json's `indirect_estimator`.
+    pub fn indirect_name(self) -> &'static str {
+        if self.connects() {
+            "next_event"
+        } else {
+            "track"
         }
     }
 }

@@ -91,12 +91,6 @@ impl ReceiverGrid {
         }
     }
 
-    /// Scored by next-event estimation rather than by the photons that cross it.
-    #[inline]
-    pub fn next_event(&self) -> bool {
-        self.estimator == Estimator::NextEvent
-    }
-
     pub fn cell_count(&self) -> usize {
         self.cells[0] as usize * self.cells[1] as usize
     }

@@ -1,12 +1,14 @@
 //! The surface interface: one scattering function (BSDF) per material, used by the photon
 //! pass, its next-event connections and the eye pass alike.
 //!
-//! A material is a weighted sum of lobes whose weights (albedos) sum to at most 1:
-//! Lambertian reflection ρ and transmission τ, an ideal mirror, an ideal dielectric
-//! (Fresnel reflection and refraction), and the two glossy lobes: a rough reflector and a
-//! rough dielectric, both GGX (Trowbridge–Reitz) microfacet lobes with Smith's
-//! height-correlated shadowing, sampled by visible normals (Heitz 2018, as in pbrt-v4's
-//! `TrowbridgeReitzDistribution`, `ConductorBxDF` and `DielectricBxDF`).
+//! A material is a weighted sum of lobes whose weights (albedos) sum to at most 1, each
+//! a [`Lobe`]: [`Lambertian`] reflection ρ and transmission τ, an ideal [`Mirror`], an
+//! ideal dielectric ([`Glass`]: Fresnel reflection and refraction), and [`Glossy`]: a
+//! rough reflector and a rough dielectric, both GGX (Trowbridge–Reitz) microfacet lobes
+//! with Smith's height-correlated shadowing, sampled by visible normals (Heitz 2018, as
+//! in pbrt-v4's `TrowbridgeReitzDistribution`, `ConductorBxDF` and `DielectricBxDF`).
+//! [`Bsdf::new`] is the one place that turns a `Material`'s fields into lobes; callers
+//! (`trace`, `render`) evaluate and sample through [`Bsdf`] and never name a lobe.
 //!
 //! Directions are unit vectors pointing *away* from the surface: `wo` towards where the
 //! path came from, `wi` where it goes (pbrt's convention). The shading frame is the
@@ -20,6 +22,8 @@ use crate::scene::Material;
 use glam::DVec3;
 use rand_pcg::Pcg32;
 use std::f64::consts::{FRAC_1_PI, PI};
+use std::fmt::Debug;
+use std::sync::Arc;
 
 /// Glossy lobes rougher than this (α = roughness² ≥ 0.04) are connected to next-event
 /// receivers like diffuse ones; sharper lobes would give connections a variance growing
@@ -36,6 +40,16 @@ pub enum LobeKind {
     Specular,
 }
 
+/// Who evaluates f·|cos θ_i| (pbrt's transport mode): photons (flux) connected to a
+/// next-event receiver, or the eye pass (luminance). The physics is the same; the
+/// Lambertian lobe keeps the two arithmetic forms each pass always used, so that every
+/// output stays bit for bit what it was.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Transport {
+    Importance,
+    Radiance,
+}
+
 /// A sampled scattering.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
@@ -50,163 +64,243 @@ pub struct Sample {
     pub weight: f64,
 }
 
-/// A material's BSDF: its lobes' albedo weights as cumulative thresholds for one uniform
-/// number (Russian roulette over lobes), the dielectric's index and the GGX α.
+/// Where an eye ray meets a surface, as the eye pass's lobe methods read it.
 #[derive(Clone, Copy, Debug)]
+pub struct Incidence {
+    /// The ray's unit direction (towards the surface).
+    pub dir: DVec3,
+    /// Unit geometric normal, and the normal on the eye's side.
+    pub n: DVec3,
+    pub facing: DVec3,
+    /// The eye sees the triangle's back.
+    pub back: bool,
+}
+
+impl Incidence {
+    pub fn new(dir: DVec3, n: DVec3) -> Incidence {
+        let back = dir.dot(n) > 0.0;
+        Incidence {
+            dir,
+            n,
+            facing: if back { -n } else { n },
+            back,
+        }
+    }
+}
+
+/// A ray the eye pass continues along from a vertex.
+#[derive(Clone, Copy, Debug)]
+pub struct Continuation {
+    pub dir: DVec3,
+    /// The path's weight times what the lobe passes on.
+    pub weight: f64,
+    /// It leaves through the surface (its origin is offset to the other side).
+    pub transmitted: bool,
+    /// The lobe already took the light of sources it sees (by shadow rays through `f`),
+    /// so sources met along it are not counted again.
+    pub lights_counted: bool,
+}
+
+/// One lobe of a BSDF: its physics for the photon pass, next-event connections and the
+/// eye pass. A new kind of surface implements this and adds one line to [`Bsdf::new`].
+pub trait Lobe: Debug + Send + Sync {
+    fn kind(&self) -> LobeKind;
+
+    /// Connected to next-event receivers (a finite f of bounded variance).
+    fn connectable(&self) -> bool {
+        self.kind() == LobeKind::Diffuse
+    }
+
+    /// Samples the photon's new direction once the roulette chose this lobe with `xi`
+    /// (below the lobe's upper threshold), for a path travelling along unit `dir` onto
+    /// a surface of unit geometric normal `normal`.
+    fn sample(&self, xi: f64, dir: DVec3, normal: DVec3, rng: &mut Pcg32) -> Option<Sample>;
+
+    /// The lobe's finite part of f(wo, wi) (1/sr), its weight included; 0 for Dirac lobes.
+    fn f(&self, _wo: DVec3, _wi: DVec3, _n: DVec3) -> f64 {
+        0.0
+    }
+
+    /// Density (1/sr) with which it samples `wi`, its weight included.
+    fn pdf(&self, _wo: DVec3, _wi: DVec3, _n: DVec3) -> f64 {
+        0.0
+    }
+
+    /// w·f(wo, wi)·|cos θ_i|, with `cos_i` = wi · (the normal on wo's side).
+    fn f_cos(&self, w: f64, wo: DVec3, wi: DVec3, n: DVec3, cos_i: f64, _: Transport) -> f64 {
+        w * self.f(wo, wi, n) * cos_i.abs()
+    }
+
+    /// Eye pass: the luminance (× `w`) it shows from the indirect illuminance read from
+    /// the map on the eye's side and on the other side; `at_depth_limit`: the path
+    /// cannot continue, so lobes that would continue report their share here.
+    fn eye_indirect(
+        &self,
+        _w: f64,
+        _at: &Incidence,
+        _e_seen: &dyn Fn() -> f64,
+        _e_other: &dyn Fn() -> f64,
+        _at_depth_limit: bool,
+    ) -> f64 {
+        0.0
+    }
+
+    /// Eye pass: the rays it continues along (`new_rng`: the vertex's random stream).
+    fn eye_continue(
+        &self,
+        _w: f64,
+        _at: &Incidence,
+        _new_rng: &dyn Fn() -> Pcg32,
+        _out: &mut dyn FnMut(Continuation),
+    ) {
+    }
+}
+
+/// A material's BSDF: its lobes, each with the upper end of its albedo interval on the
+/// cumulative line one uniform number is compared with (Russian roulette over lobes).
+#[derive(Clone, Debug)]
 pub struct Bsdf {
-    diffuse_reflect: f64,
-    diffuse_transmit: f64,
-    mirror: f64,
-    dielectric: f64,
-    glossy_reflect: f64,
-    glossy_transmit: f64,
-    ior: f64,
-    /// GGX α = roughness².
-    alpha: f64,
+    lobes: Vec<(f64, Arc<dyn Lobe>)>,
+    /// Cumulative albedo so far (while building), then the total.
+    total: f64,
+    /// Lambertian ρ and τ (the photon pass's fast path for pure reflectors).
+    diffuse: (f64, f64),
 }
 
 impl Bsdf {
+    /// The material's lobes, in roulette order: the one place that maps its fields onto
+    /// lobes (a new lobe adds its line here).
     pub fn new(m: &Material) -> Bsdf {
-        let diffuse_reflect = m.reflectance;
-        let diffuse_transmit = diffuse_reflect + m.transmittance;
-        let mirror = diffuse_transmit + m.specular_reflectance;
-        let dielectric = mirror + m.specular_transmittance;
-        let glossy_reflect = dielectric + m.glossy_reflectance;
-        let glossy_transmit = glossy_reflect + m.glossy_transmittance;
-        Bsdf {
-            diffuse_reflect,
-            diffuse_transmit,
-            mirror,
-            dielectric,
-            glossy_reflect,
-            glossy_transmit,
-            ior: m.ior,
-            alpha: (m.roughness * m.roughness).max(1e-7),
+        let mut b = Bsdf {
+            lobes: Vec::new(),
+            total: 0.0,
+            diffuse: (0.0, 0.0),
+        };
+        Lambertian::add(&mut b, m.reflectance, m.transmittance);
+        Mirror::add(&mut b, m.specular_reflectance);
+        Glass::add(&mut b, m.specular_transmittance, m.ior);
+        Glossy::add(&mut b, m);
+        b
+    }
+
+    /// Stacks an albedo `weight` on the roulette line; returns its interval's (lower,
+    /// upper) thresholds. Summed in `Material`'s order, as the thresholds always were.
+    fn stack(&mut self, weight: f64) -> (f64, f64) {
+        let lo = self.total;
+        self.total = lo + weight;
+        (lo, self.total)
+    }
+
+    /// Adds a lobe whose interval ends at the line's current total, if `present`.
+    fn push(&mut self, present: bool, lobe: impl Lobe + 'static) {
+        if present {
+            self.lobes.push((self.total, Arc::new(lobe)));
         }
     }
 
     /// Diffuse reflectance and diffuse transmittance.
     #[inline]
     pub fn diffuse(&self) -> (f64, f64) {
-        (
-            self.diffuse_reflect,
-            self.diffuse_transmit - self.diffuse_reflect,
-        )
+        self.diffuse
     }
 
-    /// Ideal mirror and ideal dielectric weights.
+    /// Diffuse reflection is its only lobe (or it absorbs everything): the photon
+    /// pass's roulette is then one comparison with ρ.
     #[inline]
-    pub fn specular(&self) -> (f64, f64) {
-        (
-            self.mirror - self.diffuse_transmit,
-            self.dielectric - self.mirror,
-        )
+    pub fn lambert_only(&self) -> bool {
+        self.total == self.diffuse.0
     }
 
-    /// Glossy reflector and rough dielectric weights.
-    #[inline]
-    pub fn glossy(&self) -> (f64, f64) {
-        (
-            self.glossy_reflect - self.dielectric,
-            self.glossy_transmit - self.glossy_reflect,
-        )
-    }
-
-    #[inline]
-    pub fn alpha(&self) -> f64 {
-        self.alpha
-    }
-
-    #[inline]
-    pub fn ior(&self) -> f64 {
-        self.ior
+    /// It has a lobe of this kind.
+    pub fn has(&self, kind: LobeKind) -> bool {
+        self.lobes.iter().any(|(_, l)| l.kind() == kind)
     }
 
     /// Its glossy lobes are connected to next-event receivers ([`CONNECT_MIN_ALPHA`]).
     #[inline]
     pub fn glossy_connectable(&self) -> bool {
-        let (r, t) = self.glossy();
-        r + t > 0.0 && self.alpha >= CONNECT_MIN_ALPHA
+        self.lobes
+            .iter()
+            .any(|(_, l)| l.kind() == LobeKind::Glossy && l.connectable())
     }
 
     /// Some part of it is connected to next-event receivers.
     #[inline]
     pub fn connectable(&self) -> bool {
-        let (rho, tau) = self.diffuse();
-        rho + tau > 0.0 || self.glossy_connectable()
+        self.lobes.iter().any(|(_, l)| l.connectable())
     }
 
-    /// The BSDF's finite part f(wo, wi) (1/sr): Lambertian and glossy lobes; the Dirac
-    /// lobes are zero almost everywhere. `n` is the unit geometric normal, whose side is
-    /// the dielectrics' outside.
-    #[inline]
+    /// The BSDF's finite part f(wo, wi) (1/sr); the Dirac lobes are zero almost
+    /// everywhere. `n` is the unit geometric normal, whose side is the dielectrics'
+    /// outside.
     pub fn f(&self, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
-        self.f_diffuse(wo, wi, n) + self.f_glossy(wo, wi, n)
-    }
-
-    /// What next-event connections evaluate: f without glossy lobes too sharp to
-    /// connect, whose photons score by crossing instead.
-    #[inline]
-    pub fn f_connectable(&self, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
-        let glossy = if self.glossy_connectable() {
-            self.f_glossy(wo, wi, n)
-        } else {
-            0.0
-        };
-        self.f_diffuse(wo, wi, n) + glossy
-    }
-
-    /// Lambertian part: ρ/π on wo's side, τ/π across.
-    #[inline]
-    pub fn f_diffuse(&self, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
-        let (rho, tau) = self.diffuse();
-        if wo.dot(n) * wi.dot(n) > 0.0 {
-            rho * FRAC_1_PI
-        } else {
-            tau * FRAC_1_PI
-        }
-    }
-
-    /// Glossy part: both microfacet lobes times their weights.
-    #[inline]
-    pub fn f_glossy(&self, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
-        let (gr, gt) = self.glossy();
-        let mut f = 0.0;
-        if gr > 0.0 || gt > 0.0 {
-            let frame = Frame::new(n);
-            let (lo, li) = (frame.to_local(wo), frame.to_local(wi));
-            if gr > 0.0 {
-                f += gr * conductor_f(lo, li, self.alpha);
-            }
-            if gt > 0.0 {
-                f += gt * dielectric_f(lo, li, self.alpha, self.ior);
-            }
-        }
-        f
+        self.lobes.iter().fold(0.0, |f, (_, l)| f + l.f(wo, wi, n))
     }
 
     /// Density (1/sr) with which [`Bsdf::sample`] returns `wi` through a finite lobe,
     /// lobe choice included: it integrates to the finite lobes' total weight, not 1.
     pub fn pdf(&self, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
-        let (rho, tau) = self.diffuse();
-        let (gr, gt) = self.glossy();
-        let cos_i = wi.dot(n);
-        let mut p = if wo.dot(n) * cos_i > 0.0 {
-            rho * cos_i.abs() * FRAC_1_PI
-        } else {
-            tau * cos_i.abs() * FRAC_1_PI
-        };
-        if gr > 0.0 || gt > 0.0 {
-            let frame = Frame::new(n);
-            let (lo, li) = (frame.to_local(wo), frame.to_local(wi));
-            if gr > 0.0 {
-                p += gr * conductor_pdf(lo, li, self.alpha);
-            }
-            if gt > 0.0 {
-                p += gt * dielectric_pdf(lo, li, self.alpha, self.ior);
+        self.lobes
+            .iter()
+            .fold(0.0, |p, (_, l)| p + l.pdf(wo, wi, n))
+    }
+
+    /// w·f(wo, wi)·|cos θ_i| summed over the finite lobes, or over the connectable ones
+    /// only (`connectable_only`: next-event connections; the other lobes' photons score
+    /// by crossing). `cos_i` = wi · (the normal on wo's side).
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub fn f_cos(
+        &self,
+        w: f64,
+        wo: DVec3,
+        wi: DVec3,
+        n: DVec3,
+        cos_i: f64,
+        mode: Transport,
+        connectable_only: bool,
+    ) -> f64 {
+        let mut sum = 0.0;
+        for (_, l) in &self.lobes {
+            let used = if connectable_only {
+                l.connectable()
+            } else {
+                l.kind() != LobeKind::Specular
+            };
+            if used {
+                sum += l.f_cos(w, wo, wi, n, cos_i, mode);
             }
         }
-        p
+        sum
+    }
+
+    /// Eye pass: the luminance its lobes show from the map's indirect illuminance
+    /// ([`Lobe::eye_indirect`]), added to `l` lobe by lobe.
+    pub fn eye_indirect(
+        &self,
+        l: &mut f64,
+        w: f64,
+        at: &Incidence,
+        e_seen: &dyn Fn() -> f64,
+        e_other: &dyn Fn() -> f64,
+        at_depth_limit: bool,
+    ) {
+        for (_, lobe) in &self.lobes {
+            *l += lobe.eye_indirect(w, at, e_seen, e_other, at_depth_limit);
+        }
+    }
+
+    /// Eye pass: the rays its lobes continue along, in lobe order.
+    pub fn eye_continue(
+        &self,
+        w: f64,
+        at: &Incidence,
+        new_rng: &dyn Fn() -> Pcg32,
+        out: &mut dyn FnMut(Continuation),
+    ) {
+        for (_, lobe) in &self.lobes {
+            lobe.eye_continue(w, at, new_rng, out);
+        }
     }
 
     /// Chooses a lobe by Russian roulette on the weights and samples the new direction
@@ -220,50 +314,253 @@ impl Bsdf {
     #[inline]
     pub fn sample(&self, dir: DVec3, normal: DVec3, rng: &mut Pcg32) -> Option<Sample> {
         let xi = uniform(rng);
-        let cos_in = dir.dot(normal);
-        // Normal on the side the path comes from.
-        let facing = if cos_in < 0.0 { normal } else { -normal };
-        let ideal = |dir, transmitted, kind| {
-            Some(Sample {
-                dir,
-                transmitted,
-                kind,
-                weight: 1.0,
-            })
-        };
-        if xi < self.diffuse_reflect {
-            ideal(cosine_hemisphere(rng, facing), false, LobeKind::Diffuse)
-        } else if xi < self.diffuse_transmit {
-            ideal(cosine_hemisphere(rng, -facing), true, LobeKind::Diffuse)
-        } else if xi < self.mirror {
-            ideal(reflect(dir, facing), false, LobeKind::Specular)
-        } else if xi < self.dielectric {
-            let eta = if cos_in < 0.0 {
-                1.0 / self.ior
-            } else {
-                self.ior
-            };
-            match refract(dir, facing, eta) {
-                Some((refracted, fresnel)) if uniform(rng) >= fresnel => {
-                    ideal(refracted, true, LobeKind::Specular)
-                }
-                // Fresnel reflection, or total internal reflection.
-                _ => ideal(reflect(dir, facing), false, LobeKind::Specular),
+        for (hi, lobe) in &self.lobes {
+            if xi < *hi {
+                return lobe.sample(xi, dir, normal, rng);
             }
-        } else if xi < self.glossy_reflect {
-            let u = [uniform(rng), uniform(rng)];
-            self.sample_glossy_reflection(-dir, normal, u)
-        } else if xi < self.glossy_transmit {
-            let u = [uniform(rng), uniform(rng), uniform(rng)];
-            self.sample_rough_dielectric(-dir, normal, u)
-        } else {
-            None
         }
+        None
+    }
+}
+
+/// The normal on the side a path travelling along `dir` comes from.
+#[inline]
+fn facing(dir: DVec3, normal: DVec3) -> DVec3 {
+    if dir.dot(normal) < 0.0 {
+        normal
+    } else {
+        -normal
+    }
+}
+
+fn ideal(dir: DVec3, transmitted: bool, kind: LobeKind) -> Option<Sample> {
+    Some(Sample {
+        dir,
+        transmitted,
+        kind,
+        weight: 1.0,
+    })
+}
+
+/// Lambertian reflection ρ (on wo's side) and transmission τ (across).
+#[derive(Clone, Copy, Debug)]
+pub struct Lambertian {
+    rho: f64,
+    tau: f64,
+    /// τ as the roulette line gives it ((ρ + τ) − ρ), which f and connections use.
+    tau_line: f64,
+    /// Roulette threshold between reflection and transmission.
+    reflect_hi: f64,
+}
+
+impl Lambertian {
+    fn add(b: &mut Bsdf, rho: f64, tau: f64) {
+        let (_, reflect_hi) = b.stack(rho);
+        let (_, hi) = b.stack(tau);
+        let tau_line = hi - reflect_hi;
+        b.diffuse = (reflect_hi, tau_line);
+        let lobe = Lambertian {
+            rho: reflect_hi,
+            tau,
+            tau_line,
+            reflect_hi,
+        };
+        b.push(rho > 0.0 || tau > 0.0, lobe);
+    }
+}
+
+impl Lobe for Lambertian {
+    fn kind(&self) -> LobeKind {
+        LobeKind::Diffuse
+    }
+
+    fn sample(&self, xi: f64, dir: DVec3, normal: DVec3, rng: &mut Pcg32) -> Option<Sample> {
+        let facing = facing(dir, normal);
+        if xi < self.reflect_hi {
+            ideal(cosine_hemisphere(rng, facing), false, LobeKind::Diffuse)
+        } else {
+            ideal(cosine_hemisphere(rng, -facing), true, LobeKind::Diffuse)
+        }
+    }
+
+    /// ρ/π on wo's side, τ/π across.
+    fn f(&self, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
+        if wo.dot(n) * wi.dot(n) > 0.0 {
+            self.rho * FRAC_1_PI
+        } else {
+            self.tau_line * FRAC_1_PI
+        }
+    }
+
+    fn pdf(&self, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
+        let cos_i = wi.dot(n);
+        if wo.dot(n) * cos_i > 0.0 {
+            self.rho * cos_i.abs() * FRAC_1_PI
+        } else {
+            self.tau_line * cos_i.abs() * FRAC_1_PI
+        }
+    }
+
+    fn f_cos(&self, w: f64, _: DVec3, _: DVec3, _: DVec3, cos_i: f64, mode: Transport) -> f64 {
+        match mode {
+            Transport::Importance => {
+                let coefficient = if cos_i > 0.0 { self.rho } else { self.tau_line };
+                w * coefficient * cos_i.abs() * FRAC_1_PI
+            }
+            Transport::Radiance => {
+                if cos_i >= 0.0 {
+                    w * self.rho * cos_i / PI
+                } else {
+                    w * self.tau * -cos_i / PI
+                }
+            }
+        }
+    }
+
+    /// ρ/π times the illuminance on the eye's side, τ/π times the other side's.
+    fn eye_indirect(
+        &self,
+        w: f64,
+        _: &Incidence,
+        e_seen: &dyn Fn() -> f64,
+        e_other: &dyn Fn() -> f64,
+        _: bool,
+    ) -> f64 {
+        w * (self.rho * e_seen() + self.tau * e_other()) / PI
+    }
+}
+
+/// An ideal mirror of reflectance `r`.
+#[derive(Clone, Copy, Debug)]
+pub struct Mirror {
+    r: f64,
+}
+
+impl Mirror {
+    fn add(b: &mut Bsdf, r: f64) {
+        b.stack(r);
+        b.push(r > 0.0, Mirror { r });
+    }
+}
+
+impl Lobe for Mirror {
+    fn kind(&self) -> LobeKind {
+        LobeKind::Specular
+    }
+
+    fn sample(&self, _: f64, dir: DVec3, normal: DVec3, _: &mut Pcg32) -> Option<Sample> {
+        ideal(reflect(dir, facing(dir, normal)), false, LobeKind::Specular)
+    }
+
+    fn eye_continue(
+        &self,
+        w: f64,
+        at: &Incidence,
+        _: &dyn Fn() -> Pcg32,
+        out: &mut dyn FnMut(Continuation),
+    ) {
+        out(Continuation {
+            dir: reflect(at.dir, at.facing),
+            weight: w * self.r,
+            transmitted: false,
+            lights_counted: false,
+        });
+    }
+}
+
+/// An ideal dielectric of weight `t` and index `ior` (outside: the normal's side):
+/// Fresnel reflection and refraction.
+#[derive(Clone, Copy, Debug)]
+pub struct Glass {
+    t: f64,
+    ior: f64,
+}
+
+impl Glass {
+    fn add(b: &mut Bsdf, t: f64, ior: f64) {
+        b.stack(t);
+        b.push(t > 0.0, Glass { t, ior });
+    }
+}
+
+impl Lobe for Glass {
+    fn kind(&self) -> LobeKind {
+        LobeKind::Specular
+    }
+
+    fn sample(&self, _: f64, dir: DVec3, normal: DVec3, rng: &mut Pcg32) -> Option<Sample> {
+        let facing = facing(dir, normal);
+        let eta = if dir.dot(normal) < 0.0 {
+            1.0 / self.ior
+        } else {
+            self.ior
+        };
+        match refract(dir, facing, eta) {
+            Some((refracted, fresnel)) if uniform(rng) >= fresnel => {
+                ideal(refracted, true, LobeKind::Specular)
+            }
+            // Fresnel reflection, or total internal reflection.
+            _ => ideal(reflect(dir, facing), false, LobeKind::Specular),
+        }
+    }
+
+    /// Both the reflection and the refraction, split by Fresnel.
+    fn eye_continue(
+        &self,
+        w: f64,
+        at: &Incidence,
+        _: &dyn Fn() -> Pcg32,
+        out: &mut dyn FnMut(Continuation),
+    ) {
+        let (dir, facing) = (at.dir, at.facing);
+        let eta = if at.back { self.ior } else { 1.0 / self.ior };
+        let w = w * self.t;
+        let go = |dir, weight, transmitted| Continuation {
+            dir,
+            weight,
+            transmitted,
+            lights_counted: false,
+        };
+        match refract(dir, facing, eta) {
+            Some((refracted, fresnel)) => {
+                out(go(reflect(dir, facing), w * fresnel, false));
+                out(go(refracted, w * (1.0 - fresnel), true));
+            }
+            None => out(go(reflect(dir, facing), w, false)),
+        }
+    }
+}
+
+/// The glossy lobes: a GGX reflector of weight `gr` (Fresnel factor 1) and a rough
+/// dielectric of weight `gt` (index `ior`), one roughness.
+#[derive(Clone, Copy, Debug)]
+pub struct Glossy {
+    gr: f64,
+    gt: f64,
+    /// Roulette threshold between the reflector and the rough dielectric.
+    reflect_hi: f64,
+    ior: f64,
+    /// GGX α = roughness².
+    alpha: f64,
+}
+
+impl Glossy {
+    fn add(b: &mut Bsdf, m: &Material) {
+        let (lo, reflect_hi) = b.stack(m.glossy_reflectance);
+        let (_, hi) = b.stack(m.glossy_transmittance);
+        let lobe = Glossy {
+            gr: reflect_hi - lo,
+            gt: hi - reflect_hi,
+            reflect_hi,
+            ior: m.ior,
+            alpha: (m.roughness * m.roughness).max(1e-7),
+        };
+        b.push(lobe.gr + lobe.gt > 0.0, lobe);
     }
 
     /// Samples the glossy reflector's lobe for `wo` (visible normals); the weight is
     /// G₂/G₁(wo). `None` when the reflected direction falls below the surface.
-    pub fn sample_glossy_reflection(&self, wo: DVec3, n: DVec3, u: [f64; 2]) -> Option<Sample> {
+    pub fn sample_reflection(&self, wo: DVec3, n: DVec3, u: [f64; 2]) -> Option<Sample> {
         // Two-sided: the frame's z is on wo's side.
         let z = if wo.dot(n) >= 0.0 { n } else { -n };
         let frame = Frame::new(z);
@@ -289,6 +586,106 @@ impl Bsdf {
             kind: LobeKind::Glossy,
             weight,
         })
+    }
+}
+
+impl Lobe for Glossy {
+    fn kind(&self) -> LobeKind {
+        LobeKind::Glossy
+    }
+
+    fn connectable(&self) -> bool {
+        self.alpha >= CONNECT_MIN_ALPHA
+    }
+
+    fn sample(&self, xi: f64, dir: DVec3, normal: DVec3, rng: &mut Pcg32) -> Option<Sample> {
+        if xi < self.reflect_hi {
+            let u = [uniform(rng), uniform(rng)];
+            self.sample_reflection(-dir, normal, u)
+        } else {
+            let u = [uniform(rng), uniform(rng), uniform(rng)];
+            self.sample_rough_dielectric(-dir, normal, u)
+        }
+    }
+
+    /// Both microfacet lobes times their weights.
+    fn f(&self, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
+        let mut f = 0.0;
+        let frame = Frame::new(n);
+        let (lo, li) = (frame.to_local(wo), frame.to_local(wi));
+        if self.gr > 0.0 {
+            f += self.gr * conductor_f(lo, li, self.alpha);
+        }
+        if self.gt > 0.0 {
+            f += self.gt * dielectric_f(lo, li, self.alpha, self.ior);
+        }
+        f
+    }
+
+    fn pdf(&self, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
+        let mut p = 0.0;
+        let frame = Frame::new(n);
+        let (lo, li) = (frame.to_local(wo), frame.to_local(wi));
+        if self.gr > 0.0 {
+            p += self.gr * conductor_pdf(lo, li, self.alpha);
+        }
+        if self.gt > 0.0 {
+            p += self.gt * dielectric_pdf(lo, li, self.alpha, self.ior);
+        }
+        p
+    }
+
+    /// At the depth limit, as if Lambertian of the same weights (the rough dielectric
+    /// split by Fresnel at the viewing angle).
+    fn eye_indirect(
+        &self,
+        w: f64,
+        at: &Incidence,
+        e_seen: &dyn Fn() -> f64,
+        e_other: &dyn Fn() -> f64,
+        at_depth_limit: bool,
+    ) -> f64 {
+        if !at_depth_limit {
+            return 0.0;
+        }
+        let (gr, gt) = (self.gr, self.gt);
+        let (e_seen, e_other) = (e_seen(), e_other());
+        let r = fr_dielectric(-at.dir.dot(at.n), self.ior);
+        w * (gr * e_seen + gt * (r * e_seen + (1.0 - r) * e_other)) / PI
+    }
+
+    /// One sampled direction per glossy lobe, weight f·|cos|/pdf.
+    fn eye_continue(
+        &self,
+        w: f64,
+        at: &Incidence,
+        new_rng: &dyn Fn() -> Pcg32,
+        out: &mut dyn FnMut(Continuation),
+    ) {
+        let mut rng = new_rng();
+        let wo = -at.dir;
+        if self.gr > 0.0 {
+            let u = [uniform(&mut rng), uniform(&mut rng)];
+            if let Some(smp) = self.sample_reflection(wo, at.n, u) {
+                out(Continuation {
+                    dir: smp.dir,
+                    weight: w * self.gr * smp.weight,
+                    transmitted: false,
+                    lights_counted: true,
+                });
+            }
+        }
+        if self.gt > 0.0 {
+            let u = [uniform(&mut rng), uniform(&mut rng), uniform(&mut rng)];
+            if let Some(smp) = self.sample_rough_dielectric(wo, at.n, u) {
+                out(Continuation {
+                    dir: smp.dir,
+                    weight: w * self.gt * smp.weight,
+                    transmitted: smp.transmitted,
+                    lights_counted: true,
+                });
+            }
+        }
     }
 }
 

@@ -24,7 +24,7 @@ use crate::rng::photon_stream;
 use crate::sampling::{cosine_hemisphere, uniform};
 use crate::scene::{Estimator, Geometry, Scene};
 use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid, Tallies};
-use bsdf::{Bsdf, LobeKind};
+use bsdf::{Bsdf, LobeKind, Transport};
 use direct::DirectLight;
 use emit::Emitters;
 use glam::{DVec3, Vec3};
@@ -145,7 +145,7 @@ impl Lanes {
 /// What the photon pass needs of a material, looked up once per hit: the BSDF and the
 /// flags that decide its path through a bounce, so the common case (a grey Lambertian
 /// reflector) skips the general lobe roulette.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Surfacing {
     bsdf: Bsdf,
     /// Connected to next-event receivers ([`Bsdf::connectable`]).
@@ -159,18 +159,11 @@ struct Surfacing {
 
 impl Surfacing {
     fn new(bsdf: Bsdf) -> Surfacing {
-        let (_, tau) = bsdf.diffuse();
-        let (mirror, dielectric) = bsdf.specular();
-        let (glossy_r, glossy_t) = bsdf.glossy();
         Surfacing {
-            bsdf,
             connectable: bsdf.connectable(),
             glossy_connectable: bsdf.glossy_connectable(),
-            lambert_only: tau == 0.0
-                && mirror == 0.0
-                && dielectric == 0.0
-                && glossy_r == 0.0
-                && glossy_t == 0.0,
+            lambert_only: bsdf.lambert_only(),
+            bsdf,
         }
     }
 }
@@ -320,7 +313,7 @@ impl<'a> Tracer<'a> {
         let (dx, dy, dz) = (&mut rays.dx[..n], &mut rays.dy[..n], &mut rays.dz[..n]);
         let (offsets, bounces) = (&mut lanes.offset[..n], &mut lanes.bounces[..n]);
         let (segments, rngs) = (&mut lanes.segment[..n], &mut lanes.rng[..n]);
-        let any_next_event = self.receivers.iter().any(|r| r.next_event());
+        let any_next_event = self.receivers.iter().any(|r| r.estimator.connects());
         // Diffuse survivors whose direction pass 3 samples. Written for every
         // Lambertian hit and kept by advancing `m`, so the roulette is no branch.
         if s.diffuse.len() < n {
@@ -483,7 +476,7 @@ impl<'a> Tracer<'a> {
         let slack = self.receiver_slack;
         r.mark_crossings([ox, oy, oz], [dx, dy, dz], t_hit, slack, marks);
         let (offsets, segments) = (&lanes.offset[..n], &lanes.segment[..n]);
-        let next_event = r.next_event();
+        let (replicates, connects) = (r.estimator.direct_by_replicates(), r.estimator.connects());
         for k in marks.iter().enumerate().filter(|m| *m.1).map(|m| m.0) {
             let origin = DVec3::new(ox[k] as f64, oy[k] as f64, oz[k] as f64);
             let dir = DVec3::new(dx[k] as f64, dy[k] as f64, dz[k] as f64);
@@ -491,12 +484,11 @@ impl<'a> Tracer<'a> {
             let Some(c) = r.crossing(origin, dir, -slack, t_reach) else {
                 continue;
             };
-            let scores = !next_event
-                || match segments[k] {
-                    Segment::Emitted => false,
-                    Segment::Specular => true,
-                    Segment::Diffuse => c.distance < r.near_zone_m,
-                };
+            let scores = match segments[k] {
+                Segment::Emitted => !replicates,
+                Segment::Specular => true,
+                Segment::Diffuse => !connects || c.distance < r.near_zone_m,
+            };
             if scores {
                 pending.push((offsets[k], c.cell, c.score_per_lm * flux));
             }
@@ -528,7 +520,7 @@ impl<'a> Tracer<'a> {
         for (r, stratum) in self
             .receivers
             .iter()
-            .filter(|r| r.next_event())
+            .filter(|r| r.estimator.connects())
             .flat_map(|r| (0..r.connections).map(move |s| (r, s)))
         {
             let Some(c) = r.connect(p.as_dvec3(), stratum, rng) else {
@@ -541,14 +533,9 @@ impl<'a> Tracer<'a> {
             }
             let cos_s = c.dir.dot(facing.as_dvec3());
             let side = if cos_s > 0.0 { facing } else { -facing };
-            // Intensity of the scattered photon towards the receiver point: Lambertian
-            // (written as ever, so diffuse scenes keep their bits) plus glossy.
-            let (rho, tau) = bsdf.diffuse();
-            let coefficient = if cos_s > 0.0 { rho } else { tau };
-            let mut intensity = flux * coefficient * cos_s.abs() * std::f64::consts::FRAC_1_PI;
-            if surfacing.glossy_connectable {
-                intensity += flux * bsdf.f_glossy(wo, c.dir, n) * cos_s.abs();
-            }
+            // Intensity of the scattered photon towards the receiver point: its
+            // connectable lobes' flux·f·|cos θ|.
+            let intensity = bsdf.f_cos(flux, wo, c.dir, n, cos_s, Transport::Importance, true);
             if intensity.is_nan() || intensity <= 0.0 {
                 continue;
             }
