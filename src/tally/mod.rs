@@ -26,6 +26,13 @@ pub struct ChunkTally {
 }
 
 impl ChunkTally {
+    /// A photon's hit on triangle `tri`: see [`deposit_code`].
+    #[inline]
+    pub fn deposit(&mut self, tri: u32, back_face: bool, indirect: bool, odd: bool) {
+        self.deposits
+            .push(deposit_code(tri, back_face, indirect, odd));
+    }
+
     /// Empties the tally, keeping its buffers.
     pub fn clear(&mut self) {
         self.deposits.clear();

@@ -23,7 +23,7 @@ use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng::photon_stream;
 use crate::sampling::{cosine_hemisphere, uniform};
 use crate::scene::{Estimator, Geometry, Scene};
-use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid, Tallies};
+use crate::tally::{CellPartial, ChunkTally, ReceiverGrid, Tallies};
 use bsdf::{Bsdf, LobeKind, Transport};
 use direct::DirectLight;
 use emit::Emitters;
@@ -91,6 +91,20 @@ pub struct Scratch {
     side: [Vec<f32>; 3],
 }
 
+impl Scratch {
+    /// Sizes the per-bounce arrays of pass 2 and 3 for `n` lanes.
+    fn size_bounce_arrays(&mut self, n: usize) {
+        if self.diffuse.len() < n {
+            self.diffuse.resize(n, DiffuseSlot::default());
+        }
+        for v in &mut self.side {
+            if v.len() < n {
+                v.resize(n, 0.0);
+            }
+        }
+    }
+}
+
 /// A diffuse survivor: its slot in the batch and the hemisphere it scatters into, the
 /// hit triangle's normal (f32, as stored) or its opposite.
 #[derive(Clone, Copy, Debug, Default)]
@@ -112,6 +126,23 @@ enum Segment {
     Diffuse,
     /// At a mirror, a refraction or a glossy lobe too sharp to connect.
     Specular,
+}
+
+impl Segment {
+    /// The segment a scattering of `kind` starts: connected (diffuse, or glossy where
+    /// the material's glossy lobe connects) or specular.
+    fn after(kind: LobeKind, glossy_connectable: bool) -> Segment {
+        let connected = match kind {
+            LobeKind::Diffuse => true,
+            LobeKind::Glossy => glossy_connectable,
+            LobeKind::Specular => false,
+        };
+        if connected {
+            Segment::Diffuse
+        } else {
+            Segment::Specular
+        }
+    }
 }
 
 /// The live photons' state besides their rays, structure of arrays in ray order.
@@ -302,13 +333,34 @@ impl<'a> Tracer<'a> {
         s.shadow_rays.clear();
         s.shadow_scores.clear();
         let n = s.rays.len();
-        let hits = &s.hits;
-        let rays = &mut s.rays;
-        let lanes = &mut s.lanes;
-        let t_hit = &hits.t[..n];
+        let t_hit = &s.hits.t[..n];
         for r in &self.receivers {
-            self.score_crossings(r, rays, t_hit, lanes, flux, &mut s.marks, &mut s.pending);
+            self.score_crossings(
+                r,
+                &s.rays,
+                t_hit,
+                &s.lanes,
+                flux,
+                &mut s.marks,
+                &mut s.pending,
+            );
         }
+        s.size_bounce_arrays(n);
+        let (survivors, diffuse) = self.hits_pass(s, tally, flux, odd_first);
+        self.end_bounce(s, tally, survivors, diffuse);
+    }
+
+    /// Pass 2 of [`Self::step`]: deposit, connect and play the roulette at each hit,
+    /// compacting the survivors in place. Returns how many survive and how many of them
+    /// scatter diffusely (their slots in `s.diffuse`).
+    fn hits_pass(
+        &self,
+        s: &mut Scratch,
+        tally: &mut ChunkTally,
+        flux: f64,
+        odd_first: bool,
+    ) -> (usize, usize) {
+        let (n, hits, rays, lanes) = (s.rays.len(), &s.hits, &mut s.rays, &mut s.lanes);
         let (ox, oy, oz) = (&mut rays.ox[..n], &mut rays.oy[..n], &mut rays.oz[..n]);
         let (dx, dy, dz) = (&mut rays.dx[..n], &mut rays.dy[..n], &mut rays.dz[..n]);
         let (offsets, bounces) = (&mut lanes.offset[..n], &mut lanes.bounces[..n]);
@@ -316,17 +368,9 @@ impl<'a> Tracer<'a> {
         let any_next_event = self.receivers.iter().any(|r| r.estimator.connects());
         // Diffuse survivors whose direction pass 3 samples. Written for every
         // Lambertian hit and kept by advancing `m`, so the roulette is no branch.
-        if s.diffuse.len() < n {
-            s.diffuse.resize(n, DiffuseSlot::default());
-        }
         let diffuse = &mut s.diffuse[..n];
         let mut m = 0;
         // Survivors leave their hit points along these normals (pass 3).
-        for v in &mut s.side {
-            if v.len() < n {
-                v.resize(n, 0.0);
-            }
-        }
         let [sx, sy, sz] = &mut s.side;
         let (sx, sy, sz) = (&mut sx[..n], &mut sy[..n], &mut sz[..n]);
         // Survivors so far: lane k's successor is written at j ≤ k.
@@ -346,9 +390,7 @@ impl<'a> Tracer<'a> {
             // Unmapped (instanced) objects scatter and occlude but hold no tallies.
             if let Some(tri) = surface.mapped {
                 let odd = (offset % 2 == 1) != odd_first;
-                tally
-                    .deposits
-                    .push(deposit_code(tri, back_face, hit_bounces > 0, odd));
+                tally.deposit(tri, back_face, hit_bounces > 0, odd);
             }
             let p = surface.point;
             let facing = if back_face { -normal } else { normal };
@@ -396,11 +438,6 @@ impl<'a> Tracer<'a> {
                 tally.record_history_hits(hit_bounces + 1);
                 continue;
             };
-            let connected = match sample.kind {
-                LobeKind::Diffuse => true,
-                LobeKind::Glossy => surfacing.glossy_connectable,
-                LobeKind::Specular => false,
-            };
             let side = if sample.transmitted { -facing } else { facing };
             let d = sample.dir.as_vec3();
             (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
@@ -408,25 +445,37 @@ impl<'a> Tracer<'a> {
             (dx[j], dy[j], dz[j]) = (d.x, d.y, d.z);
             offsets[j] = offset;
             bounces[j] = hit_bounces + 1;
-            segments[j] = if connected {
-                Segment::Diffuse
-            } else {
-                Segment::Specular
-            };
+            segments[j] = Segment::after(sample.kind, surfacing.glossy_connectable);
             rngs[j] = rngs[k].clone();
             j += 1;
         }
+        (j, m)
+    }
+
+    /// Pass 3 of [`Self::step`]: the `survivors` leave their surfaces, the `diffuse` ones
+    /// in new directions; then the bounce's shadow rays are cast and score if unblocked.
+    fn end_bounce(
+        &self,
+        s: &mut Scratch,
+        tally: &mut ChunkTally,
+        survivors: usize,
+        diffuse: usize,
+    ) {
+        let j = survivors;
+        let rays = &mut s.rays;
+        let [sx, sy, sz] = &s.side;
+        let rngs = &mut s.lanes.rng;
         offset_origins(
-            [&mut ox[..j], &mut oy[..j], &mut oz[..j]],
+            [&mut rays.ox[..j], &mut rays.oy[..j], &mut rays.oz[..j]],
             [&sx[..j], &sy[..j], &sz[..j]],
             self.scene_scale,
         );
-        for &DiffuseSlot { slot, flip, normal } in &diffuse[..m] {
+        for &DiffuseSlot { slot, flip, normal } in &s.diffuse[..diffuse] {
             let slot = slot as usize;
             let n_d = normal.as_dvec3();
             let towards = if flip { -n_d } else { n_d };
             let d = cosine_hemisphere(&mut rngs[slot], towards).as_vec3();
-            (dx[slot], dy[slot], dz[slot]) = (d.x, d.y, d.z);
+            (rays.dx[slot], rays.dy[slot], rays.dz[slot]) = (d.x, d.y, d.z);
         }
         for v in [
             &mut rays.ox,
@@ -440,7 +489,7 @@ impl<'a> Tracer<'a> {
         ] {
             v.truncate(j);
         }
-        lanes.truncate(j);
+        s.lanes.truncate(j);
         if !s.shadow_rays.is_empty() {
             self.caster.occluded(&s.shadow_rays, &mut s.occluded);
             tally.rays += s.shadow_rays.len() as u64;
