@@ -120,6 +120,17 @@ pub const MAX_MAPPED_TRIANGLES: u64 = (1 << 29) - 1;
 /// ~15 GiB.
 pub const MAX_INSTANCES: u64 = 1 << 24;
 
+/// Errs when `total` `what` pass `limit` (`hint` ends the message).
+fn within_limit(total: u64, limit: u64, what: &str, hint: &str, at: &str) -> Result<()> {
+    if total > limit {
+        return Err(Error::input(
+            at,
+            format!("{total} {what} exceed the limit of {limit}{hint}"),
+        ));
+    }
+    Ok(())
+}
+
 /// Collects every mapped object's triangles in world space and every unmapped object's
 /// prototypes and placements, then builds one `Geometry`.
 #[derive(Default)]
@@ -156,28 +167,14 @@ impl GeometryBuilder {
     /// [`MAX_MAPPED_TRIANGLES`].
     fn check_mapped(&self, more: u64, at: &str) -> Result<()> {
         let total = self.triangles.len() as u64 + more;
-        if total > MAX_MAPPED_TRIANGLES {
-            return Err(Error::input(
-                at,
-                format!(
-                    "{total} mapped triangles exceed the limit of {MAX_MAPPED_TRIANGLES} \
-                     (each holds a map): set `map = false` on instanced objects"
-                ),
-            ));
-        }
-        Ok(())
+        let hint = " (each holds a map): set `map = false` on instanced objects";
+        within_limit(total, MAX_MAPPED_TRIANGLES, "mapped triangles", hint, at)
     }
 
     /// Errs when `more` instances would pass [`MAX_INSTANCES`].
     fn check_instances(&self, more: u64, at: &str) -> Result<()> {
         let total = self.placements.len() as u64 + more;
-        if total > MAX_INSTANCES {
-            return Err(Error::input(
-                at,
-                format!("{total} instances exceed the limit of {MAX_INSTANCES}"),
-            ));
-        }
-        Ok(())
+        within_limit(total, MAX_INSTANCES, "instances", "", at)
     }
 
     fn finish(self, origin: &str) -> Result<Geometry> {

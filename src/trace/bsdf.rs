@@ -545,6 +545,28 @@ pub struct Glossy {
 }
 
 impl Glossy {
+    /// `conductor` (reflection) and `dielectric` (rough transmission) of the local
+    /// directions, times their weights: f or pdf of the two lobes.
+    fn weighted(
+        &self,
+        wo: DVec3,
+        wi: DVec3,
+        n: DVec3,
+        conductor: fn(DVec3, DVec3, f64) -> f64,
+        dielectric: fn(DVec3, DVec3, f64, f64) -> f64,
+    ) -> f64 {
+        let mut sum = 0.0;
+        let frame = Frame::new(n);
+        let (lo, li) = (frame.to_local(wo), frame.to_local(wi));
+        if self.gr > 0.0 {
+            sum += self.gr * conductor(lo, li, self.alpha);
+        }
+        if self.gt > 0.0 {
+            sum += self.gt * dielectric(lo, li, self.alpha, self.ior);
+        }
+        sum
+    }
+
     fn add(b: &mut Bsdf, m: &Material) {
         let (lo, reflect_hi) = b.stack(m.glossy_reflectance);
         let (_, hi) = b.stack(m.glossy_transmittance);
@@ -610,29 +632,11 @@ impl Lobe for Glossy {
 
     /// Both microfacet lobes times their weights.
     fn f(&self, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
-        let mut f = 0.0;
-        let frame = Frame::new(n);
-        let (lo, li) = (frame.to_local(wo), frame.to_local(wi));
-        if self.gr > 0.0 {
-            f += self.gr * conductor_f(lo, li, self.alpha);
-        }
-        if self.gt > 0.0 {
-            f += self.gt * dielectric_f(lo, li, self.alpha, self.ior);
-        }
-        f
+        self.weighted(wo, wi, n, conductor_f, dielectric_f)
     }
 
     fn pdf(&self, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
-        let mut p = 0.0;
-        let frame = Frame::new(n);
-        let (lo, li) = (frame.to_local(wo), frame.to_local(wi));
-        if self.gr > 0.0 {
-            p += self.gr * conductor_pdf(lo, li, self.alpha);
-        }
-        if self.gt > 0.0 {
-            p += self.gt * dielectric_pdf(lo, li, self.alpha, self.ior);
-        }
-        p
+        self.weighted(wo, wi, n, conductor_pdf, dielectric_pdf)
     }
 
     /// At the depth limit, as if Lambertian of the same weights (the rough dielectric
