@@ -178,7 +178,15 @@ fn unknown_key_is_named() {
     ));
     assert_has(&m, &["objects[0]", "unknown field `colour`"]);
     let m = error_of("[simulation]\nphotns = 10\n");
-    assert_has(&m, &["simulation", "unknown field `photns`"]);
+    assert_has(
+        &m,
+        &[
+            "simulation.photns",
+            "unknown field `photns`",
+            "`seed`",
+            "`photons`",
+        ],
+    );
     let m = error_of("nmae = \"x\"\n");
     assert_has(&m, &["unknown field `nmae`"]);
 }
