@@ -4,8 +4,9 @@
 
 use super::expand::{c_planes, mirror_about_zero};
 use super::grid::{Grid, TYPE_A, TYPE_B, TYPE_C};
+use super::sample::Sampler;
 use super::text::{self, at, check_increasing, check_range, Tokens, MAX_ANGLES, MAX_VALUES};
-use super::{Format, Opening, Parts, PhotometricType, Photometry, Symmetry, Tilt};
+use super::{Format, Opening, PhotometricType, Photometry, Symmetry, Tilt};
 use crate::Result;
 use std::path::Path;
 
@@ -126,24 +127,28 @@ pub(crate) fn parse(text: &str, origin: &str, dir: &Path) -> Result<Photometry> 
     };
     let (symmetry, grid) = grid(origin, r.kind, angles, rows)?;
 
-    Photometry::build(Parts {
-        file: origin.to_string(),
-        format: Format::Ies(year.unwrap_or(1986)),
-        photometric_type: r.kind,
-        symmetry,
-        grid,
+    Photometry::build(
+        Photometry {
+            file: origin.to_string(),
+            format: Format::Ies(year.unwrap_or(1986)),
+            photometric_type: r.kind,
+            symmetry,
+            grid,
+            opening: opening(r.width * r.unit_m, r.length * r.unit_m),
+            height_m: r.height.abs() * r.unit_m,
+            lamp_flux_lm: (r.lumens > 0.0).then_some(r.lamps as f64 * r.lumens),
+            lamp_output_factor,
+            input_watts: Some(r.watts),
+            stated_light_output_ratio: None,
+            stated_downward_fraction: None,
+            tilt,
+            keywords,
+            lamp_sets: Vec::new(),
+            sampler: Sampler::default(),
+            flux_lm: 0.0,
+        },
         table_line,
-        opening: opening(r.width * r.unit_m, r.length * r.unit_m),
-        height_m: r.height.abs() * r.unit_m,
-        lamp_flux_lm: (r.lumens > 0.0).then_some(r.lamps as f64 * r.lumens),
-        lamp_output_factor,
-        input_watts: Some(r.watts),
-        stated_light_output_ratio: None,
-        stated_downward_fraction: None,
-        tilt,
-        keywords,
-        lamp_sets: Vec::new(),
-    })
+    )
 }
 
 /// The tilt table `TILT=<spec>` (line `line`) names: none, the one that follows in

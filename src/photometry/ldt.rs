@@ -4,8 +4,9 @@
 
 use super::expand::c_planes;
 use super::grid::{Grid, TYPE_C};
+use super::sample::Sampler;
 use super::text::{self, at, check_increasing, check_range, MAX_ANGLES, MAX_VALUES};
-use super::{Format, LampSet, Opening, Parts, PhotometricType, Photometry, Symmetry};
+use super::{Format, LampSet, Opening, PhotometricType, Photometry, Symmetry};
 use crate::Result;
 
 /// Largest number of lamp sets accepted (the format allows 20; some writers more).
@@ -112,24 +113,28 @@ pub(crate) fn parse(text_in: &str, origin: &str) -> Result<Photometry> {
         cd: planes.concat(),
     };
     let absolute = lamp_sets[0].lamps < 0;
-    Photometry::build(Parts {
-        file: origin.to_string(),
-        format: Format::Eulumdat,
-        photometric_type: PhotometricType::C,
-        symmetry,
-        grid,
+    Photometry::build(
+        Photometry {
+            file: origin.to_string(),
+            format: Format::Eulumdat,
+            photometric_type: PhotometricType::C,
+            symmetry,
+            grid,
+            opening: opening(h.area_length_m, h.area_width_m),
+            height_m: h.height_m,
+            lamp_flux_lm: (!absolute).then_some(lamp_sets[0].flux_lm),
+            lamp_output_factor: 1.0,
+            input_watts: Some(lamp_sets[0].watts),
+            stated_light_output_ratio: Some(h.lorl / 100.0),
+            stated_downward_fraction: Some(h.dff / 100.0),
+            tilt: None,
+            keywords,
+            lamp_sets,
+            sampler: Sampler::default(),
+            flux_lm: 0.0,
+        },
         table_line,
-        opening: opening(h.area_length_m, h.area_width_m),
-        height_m: h.height_m,
-        lamp_flux_lm: (!absolute).then_some(lamp_sets[0].flux_lm),
-        lamp_output_factor: 1.0,
-        input_watts: Some(lamp_sets[0].watts),
-        stated_light_output_ratio: Some(h.lorl / 100.0),
-        stated_downward_fraction: Some(h.dff / 100.0),
-        tilt: None,
-        keywords,
-        lamp_sets,
-    })
+    )
 }
 
 /// Lines 1–26: what the file is, its counts and the luminaire's dimensions.

@@ -279,27 +279,6 @@ pub struct Photometry {
     flux_lm: f64,
 }
 
-/// What a parser hands over to [`Photometry::build`].
-pub(crate) struct Parts {
-    pub file: String,
-    pub format: Format,
-    pub photometric_type: PhotometricType,
-    pub symmetry: Symmetry,
-    pub grid: Grid,
-    /// First line of the candela values, for errors about the table as a whole.
-    pub table_line: usize,
-    pub opening: Opening,
-    pub height_m: f64,
-    pub lamp_flux_lm: Option<f64>,
-    pub lamp_output_factor: f64,
-    pub input_watts: Option<f64>,
-    pub stated_light_output_ratio: Option<f64>,
-    pub stated_downward_fraction: Option<f64>,
-    pub tilt: Option<Tilt>,
-    pub keywords: Vec<(String, String)>,
-    pub lamp_sets: Vec<LampSet>,
-}
-
 /// Reads a photometric file: `.ies` as LM-63, `.ldt` as EULUMDAT; another extension by
 /// its content (LM-63 if it has an `IES…` header or a `TILT=` line). Relative TILT files
 /// are read from the file's directory. Errors name the file and line.
@@ -334,42 +313,26 @@ pub fn parse_ldt(text: &str, origin: &str) -> Result<Photometry> {
 }
 
 impl Photometry {
-    /// Checks that the table emits light and builds its sampler.
-    pub(crate) fn build(p: Parts) -> Result<Photometry> {
-        let flux_lm = p.grid.flux_lm();
-        let table_error = |m: &str| text::at(&p.file, p.table_line, m);
-        if !flux_lm.is_finite() {
+    /// A parsed file `p` (its `sampler` and `flux_lm` placeholders) made whole: the
+    /// interpolant's flux and sampler, once the table is known to emit light; errors
+    /// name the table's first line `table_line`.
+    pub(crate) fn build(mut p: Photometry, table_line: usize) -> Result<Photometry> {
+        p.flux_lm = p.grid.flux_lm();
+        let table_error = |m: &str| text::at(&p.file, table_line, m);
+        if !p.flux_lm.is_finite() {
             return Err(table_error(
                 "the candela values are too large: their flux is not finite",
             ));
         }
-        let sampler = match Sampler::new(&p.grid) {
-            Some(s) if flux_lm > 0.0 => s,
+        p.sampler = match Sampler::new(&p.grid) {
+            Some(s) if p.flux_lm > 0.0 => s,
             _ => {
                 return Err(table_error(
                     "every candela value is 0 (after the file's factors): it emits no light",
                 ))
             }
         };
-        Ok(Photometry {
-            file: p.file,
-            format: p.format,
-            photometric_type: p.photometric_type,
-            symmetry: p.symmetry,
-            opening: p.opening,
-            height_m: p.height_m,
-            lamp_flux_lm: p.lamp_flux_lm,
-            lamp_output_factor: p.lamp_output_factor,
-            input_watts: p.input_watts,
-            stated_light_output_ratio: p.stated_light_output_ratio,
-            stated_downward_fraction: p.stated_downward_fraction,
-            tilt: p.tilt,
-            keywords: p.keywords,
-            lamp_sets: p.lamp_sets,
-            grid: p.grid,
-            sampler,
-            flux_lm,
-        })
+        Ok(p)
     }
 
     /// The interpolant's intensity in plane `c_deg` at `gamma_deg` from the nadir, cd

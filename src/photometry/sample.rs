@@ -24,7 +24,7 @@ struct Cell {
 }
 
 /// Walker's alias table over the cells (Vose's construction): O(1) per draw.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 struct Alias {
     /// Probability of keeping column k rather than its alias, times 1.
     keep: Vec<f64>,
@@ -67,8 +67,9 @@ impl Alias {
     }
 }
 
-/// Samples emission directions of a [`Grid`] in proportion to its interpolant.
-#[derive(Clone, Debug, PartialEq)]
+/// Samples emission directions of a [`Grid`] in proportion to its interpolant (the
+/// default samples nothing: a placeholder until [`Sampler::new`] has the grid's).
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Sampler {
     cells: Vec<Cell>,
     alias: Alias,
