@@ -56,7 +56,27 @@ impl RayBatch {
     }
 
     pub fn clear(&mut self) {
-        for v in [
+        self.truncate(0);
+    }
+
+    /// Keeps the first `n` rays.
+    pub fn truncate(&mut self, n: usize) {
+        for v in self.arrays() {
+            v.truncate(n);
+        }
+    }
+
+    /// `n` closest-hit rays from t = 0 to ∞, origins and directions zero (to be set).
+    pub fn reset_closest_hit(&mut self, n: usize) {
+        self.truncate(0);
+        for v in self.arrays() {
+            v.resize(n, 0.0);
+        }
+        self.tfar.fill(f32::INFINITY);
+    }
+
+    fn arrays(&mut self) -> [&mut Vec<f32>; 8] {
+        [
             &mut self.ox,
             &mut self.oy,
             &mut self.oz,
@@ -65,9 +85,7 @@ impl RayBatch {
             &mut self.dz,
             &mut self.tnear,
             &mut self.tfar,
-        ] {
-            v.clear();
-        }
+        ]
     }
 
     /// Appends one ray; `dir` need not be normalised (distances are then in its units).

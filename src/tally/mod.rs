@@ -45,11 +45,20 @@ impl ChunkTally {
     /// A photon history ended after `hits` surface hits.
     #[inline]
     pub fn record_history_hits(&mut self, hits: u32) {
+        self.record_histories(hits, 1);
+    }
+
+    /// `count` histories (0 or 1 in the photon pass's branch-free roulette) that ended
+    /// after `hits` surface hits.
+    #[inline]
+    pub fn record_histories(&mut self, hits: u32, count: u64) {
         let k = hits as u64;
-        self.history_hits[0] += k;
-        self.history_hits[1] += k * k;
-        self.history_hits[2] += k * k * k;
-        self.history_hits[3] += k * k * k * k;
+        let k2 = k * k;
+        let h = &mut self.history_hits;
+        h[0] += count * k;
+        h[1] += count * k2;
+        h[2] += count * k2 * k;
+        h[3] += count * k2 * k2;
     }
 }
 

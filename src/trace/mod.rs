@@ -65,6 +65,8 @@ pub struct Tracer<'a> {
     /// How far past a hit a receiver still counts as on the surface hit (m): 10 ppm of
     /// the scene's size, well above f32 hit-distance errors.
     pub receiver_slack: f64,
+    /// Some receiver connects scattering vertices to itself.
+    any_connects: bool,
 }
 
 /// Per-worker buffers, reused from chunk to chunk (their contents never affect results).
@@ -158,13 +160,6 @@ struct Lanes {
 }
 
 impl Lanes {
-    fn clear(&mut self) {
-        self.offset.clear();
-        self.bounces.clear();
-        self.segment.clear();
-        self.rng.clear();
-    }
-
     fn truncate(&mut self, n: usize) {
         self.offset.truncate(n);
         self.bounces.truncate(n);
@@ -209,7 +204,7 @@ impl<'a> Tracer<'a> {
     ) -> Tracer<'a> {
         let g = &scene.geometry;
         let mut first_cell = 0u32;
-        let receivers = scene
+        let receivers: Vec<ReceiverGrid> = scene
             .receivers
             .iter()
             .map(|r| {
@@ -234,11 +229,12 @@ impl<'a> Tracer<'a> {
                 .map(|m| Surfacing::new(Bsdf::new(m)))
                 .collect(),
             emitters: Emitters::new(scene),
-            receivers,
             seed,
             max_bounces: bounce_cap(max_albedo),
             scene_scale,
             receiver_slack: 1e-5 * scene_scale as f64,
+            any_connects: receivers.iter().any(|r| r.estimator.connects()),
+            receivers,
         }
     }
 
@@ -280,18 +276,9 @@ impl<'a> Tracer<'a> {
         // Every photon ray is a closest-hit ray from t = 0 to ∞: `tnear` and `tfar` are
         // set once here and never change while the batch shrinks.
         let rays = &mut scratch.rays;
-        for v in [&mut rays.ox, &mut rays.oy, &mut rays.oz] {
-            v.clear();
-            v.resize(live, 0.0);
-        }
-        for v in [&mut rays.dx, &mut rays.dy, &mut rays.dz, &mut rays.tnear] {
-            v.clear();
-            v.resize(live, 0.0);
-        }
-        rays.tfar.clear();
-        rays.tfar.resize(live, f32::INFINITY);
+        rays.reset_closest_hit(live);
         let lanes = &mut scratch.lanes;
-        lanes.clear();
+        lanes.truncate(0);
         lanes.bounces.resize(live, 0);
         lanes.segment.resize(live, Segment::Emitted);
         scratch.pending.clear();
@@ -365,7 +352,6 @@ impl<'a> Tracer<'a> {
         let (dx, dy, dz) = (&mut rays.dx[..n], &mut rays.dy[..n], &mut rays.dz[..n]);
         let (offsets, bounces) = (&mut lanes.offset[..n], &mut lanes.bounces[..n]);
         let (segments, rngs) = (&mut lanes.segment[..n], &mut lanes.rng[..n]);
-        let any_next_event = self.receivers.iter().any(|r| r.estimator.connects());
         // Diffuse survivors whose direction pass 3 samples. Written for every
         // Lambertian hit and kept by advancing `m`, so the roulette is no branch.
         let diffuse = &mut s.diffuse[..n];
@@ -395,7 +381,7 @@ impl<'a> Tracer<'a> {
             let p = surface.point;
             let facing = if back_face { -normal } else { normal };
             let surfacing = &self.surfacings[surface.material as usize];
-            if any_next_event && surfacing.connectable {
+            if self.any_connects && surfacing.connectable {
                 self.connect(
                     p,
                     normal,
@@ -428,8 +414,8 @@ impl<'a> Tracer<'a> {
                     flip: !(cos_in < 0.0),
                     normal,
                 };
-                let (kept, ended) = (survives as usize, !survives as u32);
-                record_history_hits_if(tally, hit_bounces + 1, ended);
+                let (kept, ended) = (survives as usize, !survives as u64);
+                tally.record_histories(hit_bounces + 1, ended);
                 j += kept;
                 m += kept;
                 continue;
@@ -477,18 +463,7 @@ impl<'a> Tracer<'a> {
             let d = cosine_hemisphere(&mut rngs[slot], towards).as_vec3();
             (rays.dx[slot], rays.dy[slot], rays.dz[slot]) = (d.x, d.y, d.z);
         }
-        for v in [
-            &mut rays.ox,
-            &mut rays.oy,
-            &mut rays.oz,
-            &mut rays.dx,
-            &mut rays.dy,
-            &mut rays.dz,
-            &mut rays.tnear,
-            &mut rays.tfar,
-        ] {
-            v.truncate(j);
-        }
+        rays.truncate(j);
         s.lanes.truncate(j);
         if !s.shadow_rays.is_empty() {
             self.caster.occluded(&s.shadow_rays, &mut s.occluded);
@@ -597,19 +572,6 @@ impl<'a> Tracer<'a> {
             shadow_scores.push((offset, c.cell, score));
         }
     }
-}
-
-/// [`ChunkTally::record_history_hits`] if `ended` is 1, nothing if 0: no branch, for
-/// the photon pass's roulette.
-#[inline]
-fn record_history_hits_if(tally: &mut ChunkTally, hits: u32, ended: u32) {
-    let (k, e) = (hits as u64, ended as u64);
-    let k2 = k * k;
-    let h = &mut tally.history_hits;
-    h[0] += e * k;
-    h[1] += e * k2;
-    h[2] += e * k2 * k;
-    h[3] += e * k2 * k2;
 }
 
 /// Sums each photon history's scores per cell (a photon crossing a cell twice scores
