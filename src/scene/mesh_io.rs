@@ -1,7 +1,8 @@
 //! Mesh files: Wavefront OBJ (+ MTL) through `tobj`, glTF 2.0 (`.gltf`, `.glb`) through
 //! `gltf` without its `import` feature (we resolve buffers ourselves and never decode
-//! images). Both return world-space f64 triangles and the file's own materials, already
-//! reduced to scalar diffuse and glossy reflectances and a roughness (docs/scene.md).
+//! images). Both return the file's meshes in their own frames with their placements,
+//! and the file's own materials, already reduced to scalar diffuse and glossy
+//! reflectances and a roughness (docs/scene.md).
 
 use super::shapes::Mesh;
 use crate::error::{Error, Result};
@@ -73,15 +74,6 @@ pub struct MeshFile {
     pub missing_reason: Option<String>,
 }
 
-/// Loads `path` by extension. `origin` prefixes messages (`scene.toml: objects[1].file`).
-pub fn load_mesh(path: &Path, origin: &str) -> Result<MeshFile> {
-    let parts = load_mesh_parts(path, origin)?;
-    let shown = path.display().to_string();
-    parts
-        .flatten()
-        .map_err(|msg| Error::input(origin, format!("{shown}: {}", super::file::one_line(&msg))))
-}
-
 /// A mesh file as shared meshes and their placements: glTF nodes that use one mesh are
 /// placements of one prototype; an OBJ is one prototype placed once.
 #[derive(Clone, Debug, Default)]
@@ -101,43 +93,6 @@ impl MeshParts {
             .iter()
             .map(|(p, _)| self.prototypes[*p as usize].0.triangles.len() as u64)
             .sum()
-    }
-
-    /// Every placement copied into one mesh in the file's frame (a mirroring transform
-    /// reverses the winding, glTF spec "Transformations").
-    pub fn flatten(self) -> std::result::Result<MeshFile, String> {
-        let mut out = MeshFile {
-            materials: self.materials,
-            missing_reason: self.missing_reason,
-            ..MeshFile::default()
-        };
-        for (proto, world) in &self.placements {
-            let (mesh, material) = &self.prototypes[*proto as usize];
-            let base = out.mesh.vertices.len();
-            let identity = *world == DMat4::IDENTITY;
-            for p in &mesh.vertices {
-                let p = if identity {
-                    *p
-                } else {
-                    world.transform_point3(*p)
-                };
-                out.mesh.vertices.push(check_vertex(p)?);
-            }
-            let base = u32::try_from(base).map_err(|_| "too many vertices")?;
-            if out.mesh.vertices.len() > u32::MAX as usize {
-                return Err("too many vertices".into());
-            }
-            let mirrored = world.determinant() < 0.0;
-            for t in &mesh.triangles {
-                let mut tri = t.map(|i| i + base);
-                if mirrored {
-                    tri.swap(1, 2);
-                }
-                out.mesh.triangles.push(tri);
-            }
-            out.material.extend_from_slice(material);
-        }
-        Ok(out)
     }
 }
 

@@ -121,9 +121,22 @@ pub struct Instance {
     /// z, then the translation): Embree's `RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR`. Composed in
     /// f64 (file, object, instance transforms and the re-centring) before rounding.
     pub to_local: [f32; 12],
+    /// [`Instance::normal_matrix`], computed once: every instance hit needs it.
+    normal_cols: [Vec3; 3],
 }
 
 impl Instance {
+    pub fn new(prototype: u32, object: u32, to_local: [f32; 12]) -> Instance {
+        let mut instance = Instance {
+            prototype,
+            object,
+            to_local,
+            normal_cols: [Vec3::ZERO; 3],
+        };
+        instance.normal_cols = instance.cofactor_columns();
+        instance
+    }
+
     /// Column `k` of the linear part.
     #[inline(always)]
     pub fn column(&self, k: usize) -> Vec3 {
@@ -145,8 +158,12 @@ impl Instance {
     /// (columns a1 × a2, a2 × a0, a0 × a1) maps e1 × e2 to (A e1) × (A e2); under a
     /// mirroring transform the placed triangle's winding is taken as reversed, as glTF
     /// and the flattened path do, so a normal that pointed outwards still does.
-    #[inline]
+    #[inline(always)]
     pub fn normal_matrix(&self) -> [Vec3; 3] {
+        self.normal_cols
+    }
+
+    fn cofactor_columns(&self) -> [Vec3; 3] {
         let (a0, a1, a2) = (self.column(0), self.column(1), self.column(2));
         let sign = if a0.dot(a1.cross(a2)) < 0.0 {
             -1.0
@@ -607,11 +624,9 @@ impl Instanced {
                 ilo = ilo.min(p);
                 ihi = ihi.max(p);
             }
-            instanced.instances.push(Instance {
-                prototype: pl.prototype,
-                object: pl.object,
-                to_local,
-            });
+            instanced
+                .instances
+                .push(Instance::new(pl.prototype, pl.object, to_local));
         }
         if !instanced.instances.is_empty() {
             // Rounded outwards so that f32 bounds still hold every instance.
