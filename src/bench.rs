@@ -360,10 +360,7 @@ pub fn bench_rays(
         random_rays(lo, hi, rays, 1),
         random_segments(lo, hi, rays, 2),
     );
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.max(1))
-        .build()
-        .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
+    let pool = crate::run::thread_pool(threads.max(1))?;
 
     let mut out = String::new();
     let _ = writeln!(
@@ -573,10 +570,7 @@ pub fn bench_photons(
     );
     let _ = writeln!(out, "|---:|---:|---:|---:|---:|");
     for t in [1, threads.max(1)] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build()
-            .map_err(|e| Error::Unsupported(format!("cannot start {t} threads: {e}")))?;
+        let pool = crate::run::thread_pool(t)?;
         progress(&format!("raw rays, {t} threads"));
         let raw = rust_mrays(
             caster.as_ref(),
@@ -953,10 +947,7 @@ pub fn bench_scale_case(
 /// Mrays/s of 200,000 incoherent closest-hit rays through the bounds of everything in
 /// `g` (instances included), on `threads` threads, best of 2.
 fn scale_mrays(g: &Geometry, caster: &dyn RayCaster, threads: usize) -> Result<f64> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))?;
+    let pool = crate::run::thread_pool(threads)?;
     let (lo, hi) = local_bounds(g);
     let (ilo, ihi) = g.instanced.bounds;
     let (lo, hi) = if g.instanced.is_empty() {

@@ -38,7 +38,7 @@ pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE: f64 = 127.0;
 /// bytes per triangle, less the maps' 32.
 pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE_COMPACT: f64 = 104.0;
 
-/// The same with obvhs (its CWBVH build holds more while it builds): 3.20 and 1.61 GiB
+/// The same with obvhs (its CWBVH build holds more while it builds): 1.61 and 3.20 GiB
 /// for the same scenes, 324 bytes per triangle, less the triangle maps' 64 (measured
 /// when the maps and the checkpoint's copy of them counted in u64: an overestimate by
 /// about 32 bytes since).
@@ -47,7 +47,9 @@ pub const GEOMETRY_BYTES_PER_TRIANGLE_OBVHS: f64 = 260.0;
 /// Outputs per receiver cell at their peak (bytes): summary.json (the summary, its
 /// pretty JSON text), report.html (the summary as JSON data, then as text), the EXR, CSV
 /// and PNGs. Measured: a 2000 × 2000-cell receiver peaked at 1.70 GB RSS at the end of a
-/// 2-thread run, 420 bytes per cell, of which 88 are tallies and 96 the workers' scratch.
+/// 2-thread run, 420 bytes per cell, of which 88 were the tallies then (`CellSums`
+/// before the direct light's moments; the estimate adds its size today) and 96 the
+/// workers' scratch.
 pub const OUTPUT_BYTES_PER_CELL: f64 = 240.0;
 
 /// Chunk tallies a worker keeps from epoch to epoch (an epoch lasts up to 2 s, about

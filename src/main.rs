@@ -7,6 +7,7 @@ use luxtally::accel::{self, Backend, RayCaster};
 use luxtally::checkpoint::{Checkpoint, Checkpointer};
 use luxtally::criteria::StopCriteria;
 use luxtally::distributed::Distributor;
+use luxtally::input::one_line;
 use luxtally::limits;
 use luxtally::output::{summary, write_atomic};
 use luxtally::render::{self, IndirectMap, MAP_FILE};
@@ -276,10 +277,6 @@ fn main() -> ExitCode {
 }
 
 /// Errors are printed on one line, whatever their source wrote.
-fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
-}
-
 /// The run's options: the scene's `[simulation]`, overridden by the command line.
 fn run_options(args: &RunArgs, scene: &Scene) -> Result<RunOptions> {
     let mut options = RunOptions::from_scene(scene);

@@ -735,17 +735,11 @@ fn simulation(value: toml::Value, origin: &str) -> Result<Simulation> {
         .remove("seed")
         .map(|v| file::entry::<u64>(v, origin, "simulation.seed"))
         .transpose()?;
-    // The rest are the stop criteria's keys; name `seed` too when one is unknown.
-    let keys = crate::input::fields_of::<StopCriteria>();
-    if let Some(key) = table.keys().find(|k| !keys.contains(&k.as_str())) {
-        return Err(Error::input(
-            format!("{at}.{key}"),
-            format!(
-                "unknown field `{key}`, expected one of `seed`, `{}`",
-                keys.join("`, `")
-            ),
-        ));
-    }
+    // `seed` and the stop criteria's keys, named together when one is unknown.
+    let own: Vec<&str> = std::iter::once("seed")
+        .chain(crate::input::fields_of::<StopCriteria>().iter().copied())
+        .collect();
+    crate::input::check_keys(&table, &own, &[], &at, "[simulation]")?;
     let stop: StopCriteria = file::entry(toml::Value::Table(table), origin, "simulation")?;
     stop.validate(criteria::scene_key(&at))?;
     Ok(Simulation {
