@@ -355,7 +355,7 @@ fn photon_pass(
     setup: Instant,
     out: &Path,
     distributor: Option<Box<dyn Distributor>>,
-) -> Result<RunResult> {
+) -> Result<(RunResult, Option<summary::Summary>)> {
     let interrupt = Arc::new(AtomicBool::new(false));
     {
         let flag = interrupt.clone();
@@ -426,10 +426,10 @@ fn photon_pass(
                 out.display()
             );
         }
-        return Ok(result);
+        return Ok((result, None));
     }
-    write_outputs(out, scene, options, &result, outputs_of(args)?)?;
-    Ok(result)
+    let s = write_outputs(out, scene, options, &result, outputs_of(args)?)?;
+    Ok((result, Some(s)))
 }
 
 /// `--outputs`, all files when absent.
@@ -441,17 +441,18 @@ fn outputs_of(args: &RunArgs) -> Result<luxtally::output::Outputs> {
 }
 
 /// summary.json, the run files `outputs` asks for and the indirect map of a finished
-/// run.
+/// run; returns the summary.
 fn write_outputs(
     out: &Path,
     scene: &Scene,
     options: &RunOptions,
     result: &RunResult,
     outputs: luxtally::output::Outputs,
-) -> Result<()> {
+) -> Result<summary::Summary> {
     let state = result.state(scene, options);
-    save_summary(out, &state)?;
-    luxtally::output::write_run_files_with(out, &state, outputs)?;
+    let s = summary::build(&state);
+    save_summary(out, &s)?;
+    luxtally::output::write_run_files_with(out, &state, &s, outputs)?;
     if outputs.indirect {
         IndirectMap::save_from_tallies(
             &out.join(MAP_FILE),
@@ -460,7 +461,7 @@ fn write_outputs(
             result.setup.total_flux_lm,
         )?;
     }
-    Ok(())
+    Ok(s)
 }
 
 /// `--resume` and `--shard`: the checkpoint's state, checked against the scene and
@@ -572,7 +573,7 @@ fn merge_command(
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
     let result = luxtally::checkpoint::merge(&scene, &options, caster.as_ref(), setup, shards)?;
-    write_outputs(
+    let _ = write_outputs(
         out,
         &scene,
         &options,
@@ -613,7 +614,7 @@ fn run_into(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> 
         }
         distributor = Some(Box::new(c.root(!args.quiet)));
     }
-    let result = photon_pass(
+    let (_, summary) = photon_pass(
         args,
         scene,
         options,
@@ -622,8 +623,8 @@ fn run_into(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> 
         out,
         distributor,
     )?;
-    if result.shard.is_none() {
-        print_run(args, &result.state(scene, options), out);
+    if let Some(s) = summary {
+        print_run(args, &s, out);
     }
     Ok(())
 }
@@ -679,8 +680,11 @@ fn render_into(
     let map = match &args.from {
         Some(dir) => IndirectMap::load(&dir.join(MAP_FILE), scene)?,
         None => {
-            let result = photon_pass(&args.run, scene, options, caster.as_ref(), setup, out, None)?;
-            print_run(&args.run, &result.state(scene, options), out);
+            let (result, summary) =
+                photon_pass(&args.run, scene, options, caster.as_ref(), setup, out, None)?;
+            if let Some(s) = &summary {
+                print_run(&args.run, s, out);
+            }
             IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
         }
     };
@@ -726,8 +730,7 @@ fn render_into(
     Ok(())
 }
 
-fn print_run(args: &RunArgs, state: &RunState<'_>, out: &Path) {
-    let s = summary::build(state);
+fn print_run(args: &RunArgs, s: &summary::Summary, out: &Path) {
     if !args.quiet {
         println!(
             "{}: {} photons, {} rays in {:.2} s ({:.1} Mrays/s), stopped on {}; results in {}",
@@ -765,9 +768,8 @@ fn print_run(args: &RunArgs, state: &RunState<'_>, out: &Path) {
     }
 }
 
-fn save_summary(out: &Path, state: &RunState<'_>) -> Result<()> {
-    let s = summary::build(state);
-    let json = serde_json::to_vec_pretty(&s)
+fn save_summary(out: &Path, s: &summary::Summary) -> Result<()> {
+    let json = serde_json::to_vec_pretty(s)
         .map_err(|e| Error::Unsupported(format!("summary.json: {e}")))?;
     write_atomic(&out.join("summary.json"), &json)
 }
@@ -862,7 +864,7 @@ impl Observer for CliObserver {
             && self.last_save.elapsed().as_secs_f64() >= SAVE_EVERY_S
         {
             self.last_save = Instant::now();
-            if let Err(e) = save_summary(&self.out, state) {
+            if let Err(e) = save_summary(&self.out, &summary::build(state)) {
                 self.save_error.get_or_insert(e);
             }
         }

@@ -114,12 +114,16 @@ impl Outputs {
 /// Every file besides summary.json: `receivers/NAME.{exr,csv,png}`,
 /// `receivers/NAME_error.png`, `scene_map.ply` and `report.html`.
 pub fn write_run_files(out: &Path, state: &RunState<'_>) -> Result<()> {
-    write_run_files_with(out, state, Outputs::ALL)
+    write_run_files_with(out, state, &summary::build(state), Outputs::ALL)
 }
 
-/// The files of `outputs` besides summary.json.
-pub fn write_run_files_with(out: &Path, state: &RunState<'_>, outputs: Outputs) -> Result<()> {
-    let s = summary::build(state);
+/// The files of `outputs` besides summary.json; `s` is the state's summary.
+pub fn write_run_files_with(
+    out: &Path,
+    state: &RunState<'_>,
+    s: &summary::Summary,
+    outputs: Outputs,
+) -> Result<()> {
     let dir = out.join("receivers");
     if outputs.receivers {
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
@@ -141,10 +145,10 @@ pub fn write_run_files_with(out: &Path, state: &RunState<'_>, outputs: Outputs) 
         })?;
     }
     if outputs.receivers {
-        write_receiver_pngs(out, &s)?;
+        write_receiver_pngs(out, s)?;
     }
     if outputs.report {
-        write_live_report(out, &summary_json(&s)?, report::DEFAULT_REFRESH_S)?;
+        write_live_report(out, &summary_json(s)?, report::DEFAULT_REFRESH_S)?;
     }
     Ok(())
 }
