@@ -826,6 +826,9 @@ pub struct ScaleResult {
     pub triangles_stored: u64,
     /// Triangles traced, as if flattened.
     pub triangles_traced: u64,
+    /// The BVH built (`fast` or `compact`: `--bvh auto` takes the fast one when the
+    /// memory available holds it).
+    pub bvh: String,
     /// Scene load (or generation) plus acceleration-structure build, wall seconds.
     pub setup_s: f64,
     /// Of `setup_s`: the scene load or generation (with `Geometry`), and the BVH build.
@@ -885,12 +888,14 @@ intensity_cd = 1000
     crate::scene::load_str(&text, Path::new("."), "bench-scale.toml")
 }
 
-/// Runs one case in this process: set-up, raw rays, photons, peak RSS.
+/// Runs one case in this process with the `bvh` layout: set-up, raw rays, photons, peak
+/// RSS.
 pub fn bench_scale_case(
     case: ScaleCase,
     mesh: &Path,
     photons: u64,
     threads: usize,
+    bvh: crate::accel::Bvh,
 ) -> Result<ScaleResult> {
     use crate::run::{run_from, RunOptions, Start};
     use crate::scene::Estimator;
@@ -904,7 +909,15 @@ pub fn bench_scale_case(
     };
     let load_s = start.elapsed().as_secs_f64();
     let backend = crate::accel::Backend::Embree;
-    let caster = crate::accel::build(backend, &scene.geometry)?;
+    // As a run decides (`limits::check_run`), against the memory available.
+    let budget = crate::limits::Budget::new(None)?;
+    let triangles = scene.geometry.triangle_count() as u64;
+    let bvh = crate::limits::choose_bvh(bvh, backend, |layout| {
+        budget.fits(&crate::limits::geometry_estimate(
+            triangles, backend, layout,
+        ))
+    });
+    let caster = crate::accel::build_with(backend, bvh, &scene.geometry)?;
     let setup_s = start.elapsed().as_secs_f64();
     let setup_cpu_s = process_cpu_seconds() - cpu_before_s;
     let g = &scene.geometry;
@@ -932,6 +945,7 @@ pub fn bench_scale_case(
         instances: g.instanced.instances.len() as u64,
         triangles_stored,
         triangles_traced: g.triangle_count() as u64 + g.instanced.flattened_triangle_count(),
+        bvh: bvh.name().into(),
         setup_s,
         load_s,
         bvh_s: setup_s - load_s,
@@ -971,17 +985,21 @@ pub fn scale_table(results: &[ScaleResult], threads: usize) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "| case | instances | triangles stored | triangles traced | set-up s (load + BVH) | set-up CPU s | peak RSS MiB | B/triangle | Mrays/s | photons/s |"
+        "| case | instances | triangles stored | triangles traced | BVH | set-up s (load + BVH) | set-up CPU s | peak RSS MiB | B/triangle | Mrays/s | photons/s |"
     );
-    let _ = writeln!(out, "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let _ = writeln!(
+        out,
+        "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|"
+    );
     for r in results {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {:.3e} | {:.2} ({:.2} + {:.2}) | {:.2} | {:.0} | {:.0} | {:.2} | {:.2} M |",
+            "| {} | {} | {} | {:.3e} | {} | {:.2} ({:.2} + {:.2}) | {:.2} | {:.0} | {:.0} | {:.2} | {:.2} M |",
             r.case,
             r.instances,
             r.triangles_stored,
             r.triangles_traced as f64,
+            r.bvh,
             r.setup_s,
             r.load_s,
             r.bvh_s,
@@ -999,4 +1017,51 @@ pub fn scale_table(results: &[ScaleResult], threads: usize) -> String {
          incoherent random closest-hit rays through the bounds; photons: track estimator."
     );
     out
+}
+
+/// The bench-scale plot (SVG): peak memory, set-up time and throughput against the
+/// triangles traced, instanced and flattened cases as separate lines.
+pub fn scale_plot(results: &[ScaleResult]) -> String {
+    use crate::chart::{log_log_svg, Panel, Series};
+    let kinds = [
+        ("instanced", "instances of the bunny"),
+        ("flattened", "flattened"),
+    ];
+    let series = |name: &str, value: &dyn Fn(&ScaleResult) -> f64| -> Vec<Series> {
+        kinds
+            .iter()
+            .map(|(kind, label)| Series {
+                name: format!("{name}{label}"),
+                points: results
+                    .iter()
+                    .filter(|r| r.case.starts_with(kind))
+                    .map(|r| (r.triangles_traced as f64, value(r)))
+                    .collect(),
+            })
+            .collect()
+    };
+    let x_label = "triangles traced (as if flattened)";
+    log_log_svg(&[
+        Panel {
+            title: "Peak memory".into(),
+            x_label: x_label.into(),
+            y_label: "peak RSS, MiB".into(),
+            series: series("", &|r| r.peak_rss_mib),
+        },
+        Panel {
+            title: "Set-up (load + BVH)".into(),
+            x_label: x_label.into(),
+            y_label: "seconds".into(),
+            series: series("", &|r| r.setup_s),
+        },
+        Panel {
+            title: "Throughput".into(),
+            x_label: x_label.into(),
+            y_label: "per second".into(),
+            series: series("photons, ", &|r| r.photons_per_s)
+                .into_iter()
+                .chain(series("rays, ", &|r| r.mrays_per_s * 1e6))
+                .collect(),
+        },
+    ])
 }

@@ -23,6 +23,7 @@
 
 pub mod accel;
 pub mod bench;
+pub mod chart;
 pub mod checkpoint;
 pub mod criteria;
 pub mod distributed;

@@ -14,7 +14,7 @@
 //! [`check_run`] also makes the run's own checks that keep user numbers from overflowing
 //! the engine's index types ([`crate::run::check_indexes`]), before anything is allocated.
 
-use crate::accel::Backend;
+use crate::accel::{Backend, Bvh};
 use crate::render::TILE_PIXELS;
 use crate::run::RunOptions;
 use crate::scene::file::{self, Source};
@@ -33,8 +33,8 @@ use std::path::Path;
 /// less the triangle maps' 32.
 pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE: f64 = 127.0;
 
-/// The same from `accel::embree::COMPACT_BVH_TRIANGLES` mapped triangles on, where the
-/// BVH is compact: the same runs with the compact BVH peaked at 0.66 and 1.32 GiB, 136
+/// The same with Embree's compact BVH (`--bvh compact`, or `auto` when the fast one
+/// would not fit): the same runs with the compact BVH peaked at 0.66 and 1.32 GiB, 136
 /// bytes per triangle, less the maps' 32.
 pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE_COMPACT: f64 = 104.0;
 
@@ -109,16 +109,22 @@ impl Budget {
         }
     }
 
+    /// Whether `estimate` fits (always, when the budget is unknown).
+    pub fn fits(&self, estimate: &Estimate) -> bool {
+        self.bytes
+            .is_none_or(|limit| estimate.total_bytes() <= limit as f64)
+    }
+
     /// Errs with one line naming the largest part (and the total when the other parts
     /// matter) when `estimate` needs more than the budget. `origin` prefixes the message.
     pub fn check(&self, origin: &str, estimate: &Estimate) -> Result<()> {
         let Some(limit) = self.bytes else {
             return Ok(());
         };
-        let total = estimate.total_bytes();
-        if total <= limit as f64 {
+        if self.fits(estimate) {
             return Ok(());
         }
+        let total = estimate.total_bytes();
         let Some(largest) = estimate
             .parts
             .iter()
@@ -177,12 +183,11 @@ impl Estimate {
     }
 }
 
-/// Geometry, BVH and triangle maps of `triangles` triangles.
-pub fn geometry_estimate(triangles: u64, backend: Backend) -> Estimate {
+/// Geometry, BVH (the `layout` one; `Auto` counts as fast) and triangle maps of
+/// `triangles` triangles.
+pub fn geometry_estimate(triangles: u64, backend: Backend, layout: Bvh) -> Estimate {
     let per_triangle = match backend {
-        Backend::Embree if crate::accel::embree::compact_bvh(triangles as usize) => {
-            GEOMETRY_BYTES_PER_TRIANGLE_EMBREE_COMPACT
-        }
+        Backend::Embree if layout == Bvh::Compact => GEOMETRY_BYTES_PER_TRIANGLE_EMBREE_COMPACT,
         Backend::Embree => GEOMETRY_BYTES_PER_TRIANGLE_EMBREE,
         Backend::Obvhs => GEOMETRY_BYTES_PER_TRIANGLE_OBVHS,
     };
@@ -288,30 +293,48 @@ pub fn check_run(
     camera: Option<&Camera>,
     photon_pass: bool,
     budget: &Budget,
-) -> Result<()> {
+) -> Result<Bvh> {
     crate::run::check_threads(options.threads)?;
     let origin = scene.path.display().to_string();
-    let mut estimate = geometry_estimate(scene.geometry.triangle_count() as u64, options.backend);
+    let triangles = scene.geometry.triangle_count() as u64;
     let run = photon_pass.then(|| photon_pass_estimate(scene, options));
     let eye = camera.map(|c| render_estimate(scene, c, options.threads));
     // The photon pass's tallies are gone when the eye pass starts: the larger counts.
-    let larger = match (run, eye) {
-        (Some(r), Some(e)) if e.total_bytes() > r.total_bytes() => Some(e),
-        (Some(r), _) => Some(r),
-        (None, e) => e,
+    let rest = match (run, eye) {
+        (Some(r), Some(e)) if e.total_bytes() > r.total_bytes() => e,
+        (Some(r), _) => r,
+        (None, e) => e.unwrap_or_default(),
     };
-    estimate
-        .parts
-        .extend(larger.into_iter().flat_map(|e| e.parts));
-    budget.check(&origin, &estimate)?;
-    crate::run::check_indexes(scene, options.threads)
+    let with_layout = |layout| {
+        let mut estimate = geometry_estimate(triangles, options.backend, layout);
+        estimate.parts.extend(rest.parts.iter().cloned());
+        estimate
+    };
+    let layout = choose_bvh(options.bvh, options.backend, |l| {
+        budget.fits(&with_layout(l))
+    });
+    budget.check(&origin, &with_layout(layout))?;
+    crate::run::check_indexes(scene, options.threads)?;
+    Ok(layout)
+}
+
+/// The BVH a run builds: `choice`, unless `Auto`, which takes Embree's fast BVH when
+/// the run `fits` with it and the compact one otherwise (obvhs has one layout). When
+/// neither fits, the compact one: the refusal then names the smaller need.
+pub fn choose_bvh(choice: Bvh, backend: Backend, fits: impl Fn(Bvh) -> bool) -> Bvh {
+    match (choice, backend) {
+        (Bvh::Auto, Backend::Obvhs) => Bvh::Fast,
+        (Bvh::Auto, Backend::Embree) if fits(Bvh::Fast) => Bvh::Fast,
+        (Bvh::Auto, Backend::Embree) => Bvh::Compact,
+        (chosen, _) => chosen,
+    }
 }
 
 /// Before tessellating: the triangles the scene file's built-in shapes will make (mesh
 /// files are counted once loaded, by [`check_run`]) against `budget`, so a file of many
 /// finely subdivided spheres is refused before the loader builds them. A file that does
 /// not parse passes: the loader reports it.
-pub fn check_scene_file(path: &Path, backend: Backend, budget: &Budget) -> Result<()> {
+pub fn check_scene_file(path: &Path, backend: Backend, layout: Bvh, budget: &Budget) -> Result<()> {
     if budget.bytes.is_none() {
         return Ok(());
     }
@@ -332,7 +355,9 @@ pub fn check_scene_file(path: &Path, backend: Backend, budget: &Budget) -> Resul
             },
         )
         .fold(0, u64::saturating_add);
-    budget.check(&origin, &geometry_estimate(triangles, backend))
+    // Refused only if the smallest BVH the run may choose would not fit.
+    let smallest = choose_bvh(layout, backend, |_| false);
+    budget.check(&origin, &geometry_estimate(triangles, backend, smallest))
 }
 
 /// Memory available to this process now (bytes): `MemAvailable` of /proc/meminfo,

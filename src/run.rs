@@ -1,7 +1,7 @@
 //! A run: epochs of photons traced in parallel, merged in photon order, evaluated,
 //! forecast and checked against the stop criteria; everything traced is in the result.
 
-use crate::accel::{self, Backend, RayCaster};
+use crate::accel::{self, Backend, Bvh, RayCaster};
 use crate::criteria::{self, StopCriteria};
 use crate::distributed::Distributor;
 use crate::scene::{Estimator, Scene};
@@ -34,6 +34,8 @@ pub struct RunOptions {
     pub seed: u64,
     pub threads: usize,
     pub backend: Backend,
+    /// Which BVH the backend builds (`--bvh`).
+    pub bvh: Bvh,
     /// Overrides every receiver's `estimator` (`--estimator`).
     pub estimator: Option<Estimator>,
 }
@@ -46,6 +48,7 @@ impl RunOptions {
             seed: scene.simulation.seed,
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             backend: Backend::Embree,
+            bvh: Bvh::Auto,
             estimator: None,
         }
     }
@@ -184,7 +187,7 @@ pub fn run(
     observer: &mut dyn Observer,
 ) -> Result<RunResult> {
     let setup = Instant::now();
-    let caster = accel::build(options.backend, &scene.geometry)?;
+    let caster = accel::build_with(options.backend, options.bvh, &scene.geometry)?;
     run_from(
         scene,
         options,

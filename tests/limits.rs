@@ -2,7 +2,7 @@
 //! numbers would overflow the engine's indices, stop before allocating with one line
 //! naming the part at fault and its figure, exit 1, no panic and no output folder.
 
-use luxtally::accel::Backend;
+use luxtally::accel::{Backend, Bvh};
 use luxtally::limits::{self, Budget};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -230,7 +230,7 @@ fn scene_of_many_fine_spheres_is_refused_before_it_is_tessellated() {
     // a single one.
     let many = spheres(&dir, 1000, 8);
     let budget = Budget::new(Some("64G")).unwrap();
-    let err = limits::check_scene_file(&many, Backend::Embree, &budget)
+    let err = limits::check_scene_file(&many, Backend::Embree, Bvh::Auto, &budget)
         .unwrap_err()
         .to_string();
     assert!(err.contains("objects: 1310720000 triangles need"), "{err}");
@@ -264,4 +264,79 @@ fn a_run_that_fails_after_creating_its_folder_removes_it() {
     ]);
     assert_eq!(again.status.code(), Some(1));
     assert!(out.exists());
+}
+
+/// `bvh` of a finished run's summary.json.
+fn summary_bvh(out: &Path) -> String {
+    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    json["bvh"].as_str().expect("bvh key").to_string()
+}
+
+#[test]
+fn the_compact_bvh_is_chosen_when_the_fast_one_would_not_fit() {
+    let dir = temp_dir("bvh");
+    // One sphere of 1.3 M triangles; a budget between its compact and fast estimates.
+    let scene = spheres(&dir, 1, 8);
+    let triangles = 20 * 4u64.pow(8);
+    let need = |bvh| limits::geometry_estimate(triangles, Backend::Embree, bvh).total_bytes();
+    let (fast, compact) = (need(Bvh::Fast), need(Bvh::Compact));
+    assert!(compact < fast, "compact {compact} B, fast {fast} B");
+    let between = format!("{}", ((fast + compact) / 2.0) as u64);
+    let run = |out: &Path, extra: &[&str]| {
+        let mut args = vec!["run", s(&scene), "--out", s(out), "--photons", "2000"];
+        args.extend_from_slice(&["--outputs", "none", "--threads", "1"]);
+        args.extend_from_slice(extra);
+        luxtally(&args)
+    };
+
+    let out = dir.join("auto");
+    let r = run(&out, &["--max-memory", &between]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    assert!(err.contains("building the compact one"), "{err}");
+    assert_eq!(summary_bvh(&out), "compact");
+
+    // Asked for by name, the fast BVH is refused under the same budget ...
+    let out = dir.join("fast");
+    assert_refused(
+        &run(&out, &["--max-memory", &between, "--bvh", "fast"]),
+        &["objects: 1310720 triangles need", "allowed by --max-memory"],
+        &out,
+    );
+    // ... and chosen, without a word, when the budget holds it.
+    let out = dir.join("roomy");
+    let r = run(&out, &["--max-memory", "8G", "--quiet"]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(
+        r.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    assert_eq!(summary_bvh(&out), "fast");
+    // obvhs has no compact BVH.
+    let r = run(
+        &dir.join("obvhs"),
+        &["--backend", "obvhs", "--bvh", "compact"],
+    );
+    assert_eq!(r.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("--bvh"));
+}
+
+#[test]
+fn choose_bvh_prefers_speed_while_memory_allows() {
+    let choose = |choice, backend, fast_fits: bool| {
+        limits::choose_bvh(choice, backend, |bvh| bvh == Bvh::Compact || fast_fits)
+    };
+    assert_eq!(choose(Bvh::Auto, Backend::Embree, true), Bvh::Fast);
+    assert_eq!(choose(Bvh::Auto, Backend::Embree, false), Bvh::Compact);
+    assert_eq!(choose(Bvh::Auto, Backend::Obvhs, false), Bvh::Fast);
+    assert_eq!(choose(Bvh::Fast, Backend::Embree, false), Bvh::Fast);
+    assert_eq!(choose(Bvh::Compact, Backend::Embree, true), Bvh::Compact);
+    // An unknown budget holds anything.
+    assert!(Budget::unlimited().fits(&limits::geometry_estimate(
+        1 << 40,
+        Backend::Embree,
+        Bvh::Fast
+    )));
 }

@@ -7,7 +7,7 @@
 //! top scene as `RTC_GEOMETRY_TYPE_INSTANCE` geometries (instance k has geometry id
 //! k + 1); a hit reports `instID[0]` and the prototype's `primID`.
 
-use super::{HitBatch, RayApi, RayBatch, RayCaster, INSTANCE_HIT};
+use super::{Bvh, HitBatch, RayApi, RayBatch, RayCaster, INSTANCE_HIT};
 use crate::scene::Geometry;
 use crate::{Error, Result};
 use glam::Vec3;
@@ -31,19 +31,6 @@ const INVALID_ID: u32 = u32::MAX;
 
 /// Rays per `rtcIntersect1M`/`rtcOccluded1M` call: the stream scratch lives on the stack.
 const STREAM_CHUNK: usize = 256;
-
-/// Mapped triangles from which the top scene's BVH is compact (`RTC_SCENE_FLAG_COMPACT`:
-/// leaves hold vertex indices into the shared vertex array instead of copies of the
-/// vertices). Measured on the procedural scene of 10⁷ triangles (BENCHMARKS.md,
-/// "Scale"): the BVH takes 35 bytes per triangle instead of 66 (98 at the build's peak),
-/// its build 25 % less CPU, but rays trace 35 % slower (10⁶ and 10⁷ triangles); the
-/// bundled scenes gave the same bits either way. Below this, speed comes first.
-pub const COMPACT_BVH_TRIANGLES: usize = 1 << 24;
-
-/// Whether a scene of `triangles` mapped triangles gets the compact BVH.
-pub fn compact_bvh(triangles: usize) -> bool {
-    triangles >= COMPACT_BVH_TRIANGLES
-}
 
 /// Feeds rays `0..n` to a stream call in chunks of [`STREAM_CHUNK`] records: `record(i)`
 /// builds record i, `call` casts a chunk, `read(i, record)` takes each result back.
@@ -140,14 +127,23 @@ unsafe impl Send for EmbreeScene {}
 unsafe impl Sync for EmbreeScene {}
 
 impl EmbreeScene {
-    /// Builds the scene with Embree's default device configuration.
+    /// Builds the scene with Embree's default device configuration and the fast BVH.
     pub fn new(geometry: &Geometry) -> Result<EmbreeScene> {
         Self::with_device_config(geometry, "")
+    }
+
+    /// Builds the scene with the `bvh` layout (`Auto` builds the fast one).
+    pub fn with_bvh(geometry: &Geometry, bvh: Bvh) -> Result<EmbreeScene> {
+        Self::build(geometry, "", bvh)
     }
 
     /// Builds the scene on a device created with Embree's `config` string
     /// (e.g. `"threads=1"`); Embree's complaints become `Error::Embree`.
     pub fn with_device_config(geometry: &Geometry, config: &str) -> Result<EmbreeScene> {
+        Self::build(geometry, config, Bvh::Fast)
+    }
+
+    fn build(geometry: &Geometry, config: &str, bvh: Bvh) -> Result<EmbreeScene> {
         let nverts = geometry.vertices.len();
         if let Some((k, tri)) = geometry
             .triangles
@@ -195,7 +191,11 @@ impl EmbreeScene {
         // Measured (BENCHMARKS.md): ROBUST costs 5–15 % on incoherent rays and closes the
         // edge cracks that would leak light; HIGH quality traced no faster than MEDIUM on
         // incoherent rays (ROBUST disables its spatial splits) but builds slower.
-        let flags = if compact_bvh(geometry.triangles.len()) {
+        // The compact BVH's leaves hold vertex indices into the shared vertex array
+        // instead of copies of the vertices (measured at 10⁷ triangles: 35 bytes per
+        // triangle instead of 66, 98 at the build's peak; rays 35 % slower; same bits on
+        // every bundled scene).
+        let flags = if bvh.built() == Bvh::Compact {
             sys::RTC_SCENE_FLAG_ROBUST | sys::RTC_SCENE_FLAG_COMPACT
         } else {
             sys::RTC_SCENE_FLAG_ROBUST

@@ -20,6 +20,8 @@ use std::collections::BTreeMap;
 pub struct Summary {
     pub scene: String,
     pub backend: String,
+    /// The BVH layout built: `fast` or `compact` (`--bvh`).
+    pub bvh: String,
     pub seed: u64,
     pub threads: usize,
     pub photons_emitted: u64,
@@ -190,6 +192,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
     Summary {
         scene: scene.name.clone(),
         backend: state.options.backend.name().to_string(),
+        bvh: state.options.bvh.built().name().to_string(),
         seed: state.options.seed,
         threads: state.setup.threads,
         photons_emitted: t.photons,
