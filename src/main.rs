@@ -345,8 +345,8 @@ fn budget_for(args: &RunArgs) -> Result<limits::Budget> {
     Ok(budget)
 }
 
-/// The photon pass shared by `run` and `render`: runs with all stop criteria and writes
-/// summary.json and the indirect map (`render --from` reads it) into `out`.
+/// The photon pass shared by `run` and `render`: runs with all stop criteria, saving
+/// checkpoints into `out`; `finish_run` writes its outputs.
 fn photon_pass(
     args: &RunArgs,
     scene: &Scene,
@@ -355,7 +355,7 @@ fn photon_pass(
     setup: Instant,
     out: &Path,
     distributor: Option<Box<dyn Distributor>>,
-) -> Result<(RunResult, Option<summary::Summary>)> {
+) -> Result<RunResult> {
     let interrupt = Arc::new(AtomicBool::new(false));
     {
         let flag = interrupt.clone();
@@ -426,10 +426,25 @@ fn photon_pass(
                 out.display()
             );
         }
-        return Ok((result, None));
     }
-    let s = write_outputs(out, scene, options, &result, outputs_of(args)?)?;
-    Ok((result, Some(s)))
+    Ok(result)
+}
+
+/// summary.json and the files `outputs` asks for, then the run's printed lines; nothing
+/// for a shard, whose checkpoint is its output.
+fn finish_run(
+    args: &RunArgs,
+    out: &Path,
+    scene: &Scene,
+    options: &RunOptions,
+    result: &RunResult,
+    outputs: luxtally::output::Outputs,
+) -> Result<()> {
+    if result.shard.is_none() {
+        let s = write_outputs(out, scene, options, result, outputs)?;
+        print_run(args, &s, out);
+    }
+    Ok(())
 }
 
 /// `--outputs`, all files when absent.
@@ -593,14 +608,20 @@ fn run_command(args: RunArgs) -> Result<()> {
     let budget = budget_for(&args)?;
     let scene = luxtally::scene::load(&args.scene)?;
     let options = run_options(&args, &scene)?;
-    outputs_of(&args)?;
+    let outputs = outputs_of(&args)?;
     limits::check_run(&scene, &options, None, true, &budget)?;
     let dir = out_dir(args.out.as_deref().or(args.resume.as_deref()), &scene)?;
-    dir.keep_on(run_into(&args, &scene, &options, &dir.path))
+    dir.keep_on(run_into(&args, outputs, &scene, &options, &dir.path))
 }
 
 /// `run` once its output folder exists.
-fn run_into(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> Result<()> {
+fn run_into(
+    args: &RunArgs,
+    outputs: luxtally::output::Outputs,
+    scene: &Scene,
+    options: &RunOptions,
+    out: &Path,
+) -> Result<()> {
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
     #[cfg(feature = "mpi")]
@@ -614,7 +635,7 @@ fn run_into(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> 
         }
         distributor = Some(Box::new(c.root(!args.quiet)));
     }
-    let (_, summary) = photon_pass(
+    let result = photon_pass(
         args,
         scene,
         options,
@@ -623,10 +644,7 @@ fn run_into(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> 
         out,
         distributor,
     )?;
-    if let Some(s) = summary {
-        print_run(args, &s, out);
-    }
-    Ok(())
+    finish_run(args, out, scene, options, &result, outputs)
 }
 
 /// `render`: the photon pass (or a saved map with --from), then the eye pass.
@@ -634,8 +652,8 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let budget = budget_for(&args.run)?;
     let mut scene = luxtally::scene::load(&args.run.scene)?;
     let options = run_options(&args.run, &scene)?;
-    outputs_of(&args.run)?;
     // Checked before the photon pass, which may be long.
+    let outputs = outputs_of(&args.run)?;
     let mut camera = render::camera_of(&scene)?.clone();
     if args.no_interpolation {
         camera.interpolate = false;
@@ -662,29 +680,28 @@ fn render_command(args: RenderArgs) -> Result<()> {
             .or(args.run.resume.as_deref()),
         &scene,
     )?;
-    dir.keep_on(render_into(&args, &scene, &options, &camera, &dir.path))
+    dir.keep_on(render_into(
+        &args, outputs, &scene, &options, &camera, &dir.path,
+    ))
 }
 
 /// `render` once its output folder exists: the photon pass (or the saved map), then
 /// the image.
 fn render_into(
     args: &RenderArgs,
+    outputs: luxtally::output::Outputs,
     scene: &Scene,
     options: &RunOptions,
     camera: &luxtally::scene::Camera,
     out: &Path,
 ) -> Result<()> {
-    let outputs = outputs_of(&args.run)?;
     let setup = Instant::now();
     let caster = accel::build(options.backend, &scene.geometry)?;
     let map = match &args.from {
         Some(dir) => IndirectMap::load(&dir.join(MAP_FILE), scene)?,
         None => {
-            let (result, summary) =
-                photon_pass(&args.run, scene, options, caster.as_ref(), setup, out, None)?;
-            if let Some(s) = &summary {
-                print_run(&args.run, s, out);
-            }
+            let result = photon_pass(&args.run, scene, options, caster.as_ref(), setup, out, None)?;
+            finish_run(&args.run, out, scene, options, &result, outputs)?;
             IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
         }
     };
