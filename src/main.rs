@@ -397,11 +397,13 @@ fn photon_pass(
         start,
     )?;
     if let Some(c) = &observer.checkpoints {
-        if let Some((waited, written, bytes)) = c.last_cost {
+        if let Some(cost) = c.last_cost {
             observer.progress.println(format!(
-                "checkpoint: {:.1} MB written in {written:.3} s; the run waited {waited:.3} s \
+                "checkpoint: {:.1} MB written in {:.3} s; the run waited {:.3} s \
                  for it, {:.3} s for all {} saves",
-                bytes as f64 / 1e6,
+                cost.bytes as f64 / 1e6,
+                cost.written_s,
+                cost.waited_s,
                 c.total_s,
                 c.saves
             ));
