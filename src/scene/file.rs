@@ -173,6 +173,23 @@ pub struct ObjectFile {
     pub grid: Option<GridFile>,
 }
 
+impl ObjectFile {
+    /// Whether its triangles are flattened into the scene map: `map`, by default unless
+    /// it has copies (`instances` or `grid`), which are otherwise instanced.
+    pub fn mapped(&self) -> bool {
+        self.map
+            .unwrap_or(self.instances.is_none() && self.grid.is_none())
+    }
+
+    /// Copies it makes: each `instances` entry (one without) at each `grid` point
+    /// (saturating: the loader refuses past `load::MAX_INSTANCES`).
+    pub fn copy_count(&self) -> u64 {
+        let listed = self.instances.as_ref().map_or(1, |l| l.len() as u64);
+        let [nx, ny] = self.grid.map_or([1, 1], |g| g.count);
+        nx.saturating_mul(ny).saturating_mul(listed)
+    }
+}
+
 /// Reads `[[objects]]` entry `path` (`objects[i]`): `shape` or `file` says what it is;
 /// keys of another shape are reported as not applying to this one (or to a mesh file).
 pub fn object(value: toml::Value, origin: &str, path: &str) -> Result<ObjectEntry> {

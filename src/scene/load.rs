@@ -229,7 +229,7 @@ fn load_object(
     };
     let transform = transform(o, &at)?;
     let copies = copies(o, &at)?;
-    let mapped = o.map.unwrap_or(o.instances.is_none() && o.grid.is_none());
+    let mapped = o.mapped();
     let object = Placed {
         object: i as u32,
         transform,
@@ -441,7 +441,7 @@ fn copies(o: &ObjectFile, at: &str) -> Result<Vec<DAffine3>> {
             format!("zero copies: {:?} (each must be ≥ 1)", grid.count),
         ));
     }
-    let total = nx.saturating_mul(ny).saturating_mul(list.len() as u64);
+    let total = o.copy_count();
     if total > MAX_INSTANCES {
         return Err(Error::input(
             format!("{at}.grid.count"),
