@@ -911,10 +911,14 @@ pub fn bench_scale_case(
     let backend = crate::accel::Backend::Embree;
     // As a run decides (`limits::check_run`), against the memory available.
     let budget = crate::limits::Budget::new(None)?;
-    let triangles = scene.geometry.triangle_count() as u64;
+    let g = &scene.geometry;
+    let (mapped, prototypes) = (
+        g.triangle_count() as u64,
+        g.instanced.stored_triangle_count() as u64,
+    );
     let bvh = crate::limits::choose_bvh(bvh, backend, |layout| {
         budget.fits(&crate::limits::geometry_estimate(
-            triangles, backend, layout,
+            mapped, prototypes, backend, layout,
         ))
     });
     let caster = crate::accel::build_with(backend, bvh, &scene.geometry)?;

@@ -130,15 +130,16 @@ struct SavedTallies {
 }
 
 impl SavedTallies {
-    #[cfg(test)]
-    fn of(t: &Tallies) -> SavedTallies {
+    /// `t` as saved, with `cells` its cells packed (or empty, to be packed on another
+    /// thread).
+    fn of(t: &Tallies, cells: Bytes) -> SavedTallies {
         SavedTallies {
             photons: t.photons,
             rays: t.rays,
             killed_by_bounce_cap: t.killed_by_bounce_cap,
             history_hits: t.history_hits,
             triangle_hits: t.triangle_hits.clone(),
-            cells: Bytes(pack_cells(&t.cells)),
+            cells,
             direct_replicates: t.direct_replicates,
             direct_rays: t.direct_rays,
             dark: t.dark,
@@ -288,17 +289,7 @@ impl Checkpoint {
     /// [`Checkpoint::of`] with the cells still to pack (a copy, for another thread).
     fn deferred(state: &RunState<'_>, scene_fingerprint: u64) -> (Checkpoint, Vec<CellSums>) {
         let t = state.tallies;
-        let tallies = SavedTallies {
-            photons: t.photons,
-            rays: t.rays,
-            killed_by_bounce_cap: t.killed_by_bounce_cap,
-            history_hits: t.history_hits,
-            triangle_hits: t.triangle_hits.clone(),
-            cells: Bytes(Vec::new()),
-            direct_replicates: t.direct_replicates,
-            direct_rays: t.direct_rays,
-            dark: t.dark,
-        };
+        let tallies = SavedTallies::of(t, Bytes(Vec::new()));
         let c = Checkpoint {
             scene_path: state.scene.path.display().to_string(),
             scene_fingerprint,
@@ -488,13 +479,30 @@ pub struct Checkpointer {
     pub period_s: f64,
     pub fingerprint: u64,
     last: Instant,
-    pending: Option<std::thread::JoinHandle<Result<(f64, u64)>>>,
-    /// Seconds the run waited for the latest save, seconds its writing took, bytes.
-    pub last_cost: Option<(f64, f64, u64)>,
+    pending: Option<PendingSave>,
+    /// The latest save on disk.
+    pub last_cost: Option<SaveCost>,
     /// Seconds the run waited for saves, in all.
     pub total_s: f64,
     /// Saves done.
     pub saves: u64,
+}
+
+/// A save being packed and written on another thread (returns seconds and bytes).
+struct PendingSave {
+    writer: std::thread::JoinHandle<Result<(f64, u64)>>,
+    /// Seconds the run waited for the state's copy.
+    copy_s: f64,
+}
+
+/// What one save cost.
+#[derive(Clone, Copy, Debug)]
+pub struct SaveCost {
+    /// Seconds the run waited for it: the copy, then joining its writer.
+    pub waited_s: f64,
+    /// Seconds its packing and writing took on the writer's thread.
+    pub written_s: f64,
+    pub bytes: u64,
 }
 
 impl Checkpointer {
@@ -511,15 +519,24 @@ impl Checkpointer {
         }
     }
 
-    /// Waits for the save under way; returns its seconds and bytes.
-    fn finish_pending(&mut self) -> Result<Option<(f64, u64)>> {
-        match self.pending.take() {
-            None => Ok(None),
-            Some(h) => h
-                .join()
-                .map_err(|_| Error::Unsupported("the checkpoint writer panicked".into()))?
-                .map(Some),
-        }
+    /// Waits for the save under way, which becomes `last_cost`.
+    fn finish_pending(&mut self) -> Result<()> {
+        let Some(save) = self.pending.take() else {
+            return Ok(());
+        };
+        let t = Instant::now();
+        let (written_s, bytes) = save
+            .writer
+            .join()
+            .map_err(|_| Error::Unsupported("the checkpoint writer panicked".into()))??;
+        let joined_s = t.elapsed().as_secs_f64();
+        self.total_s += joined_s;
+        self.last_cost = Some(SaveCost {
+            waited_s: save.copy_s + joined_s,
+            written_s,
+            bytes,
+        });
+        Ok(())
     }
 
     /// Saves if due (or on the last epoch, then waiting until it is on disk).
@@ -528,8 +545,8 @@ impl Checkpointer {
         if !last && self.last.elapsed().as_secs_f64() < self.period_s {
             return Ok(());
         }
+        self.finish_pending()?;
         let t = Instant::now();
-        let mut written = self.finish_pending()?;
         let (mut c, cells) = Checkpoint::deferred(state, self.fingerprint);
         let dir = self.dir.clone();
         let handle = std::thread::spawn(move || {
@@ -539,15 +556,15 @@ impl Checkpointer {
             let bytes = c.save(&dir)?;
             Ok((t.elapsed().as_secs_f64(), bytes))
         });
-        self.pending = Some(handle);
-        if last {
-            written = self.finish_pending()?;
-        }
-        let waited = t.elapsed().as_secs_f64();
-        self.total_s += waited;
+        let copy_s = t.elapsed().as_secs_f64();
+        self.total_s += copy_s;
         self.saves += 1;
-        if let Some((s, bytes)) = written {
-            self.last_cost = Some((if last { waited - s } else { waited }, s, bytes));
+        self.pending = Some(PendingSave {
+            writer: handle,
+            copy_s,
+        });
+        if last {
+            self.finish_pending()?;
         }
         self.last = Instant::now();
         Ok(())
@@ -744,7 +761,10 @@ mod tests {
             photons_goal: Some(10),
             shard: None,
             finished: false,
-            tallies: SavedTallies::of(&Tallies::new(2, 3)),
+            tallies: {
+                let t = Tallies::new(2, 3);
+                SavedTallies::of(&t, Bytes(pack_cells(&t.cells)))
+            },
             direct_per_photon: 0.25,
             history: vec![],
             times_s: [1.0; 4],

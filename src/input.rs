@@ -12,6 +12,15 @@ pub fn one_line(text: &str) -> String {
     text.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
+/// Names for a message: "a, b or c" ("a" alone).
+pub fn or_list<S: std::fmt::Display>(names: impl IntoIterator<Item = S>) -> String {
+    let names: Vec<String> = names.into_iter().map(|n| n.to_string()).collect();
+    match names.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        _ => names.join(""),
+    }
+}
+
 /// Deserialises one entry at key path `path` (`objects[2]`, empty for the top level);
 /// messages name the full path of the key at fault (`objects[2].radius`).
 pub fn entry<T: DeserializeOwned>(value: toml::Value, origin: &str, path: &str) -> Result<T> {
@@ -147,5 +156,12 @@ mod tests {
     #[test]
     fn fields_of_lists_a_derived_structs_keys_renamed() {
         assert_eq!(fields_of::<Probe>(), &["a", "type"]);
+    }
+
+    #[test]
+    fn or_list_joins_with_commas_and_a_final_or() {
+        assert_eq!(or_list(["a", "b", "c"]), "a, b or c");
+        assert_eq!(or_list(["a", "b"]), "a or b");
+        assert_eq!(or_list(["a"]), "a");
     }
 }

@@ -183,29 +183,37 @@ impl Estimate {
     }
 }
 
-/// Geometry, BVH (the `layout` one; `Auto` counts as fast) and triangle maps of
-/// `triangles` triangles.
-pub fn geometry_estimate(triangles: u64, backend: Backend, layout: Bvh) -> Estimate {
-    let per_triangle = match backend {
-        Backend::Embree if layout == Bvh::Compact => GEOMETRY_BYTES_PER_TRIANGLE_EMBREE_COMPACT,
+/// Geometry and BVH of `mapped` triangles (flattened, each with a triangle map; their
+/// BVH the `layout` one, `Auto` counting as fast) and `prototypes` triangles (stored
+/// once for the instances of `map = false` objects, in BVHs of their own, no map), and
+/// the mapped triangles' maps.
+pub fn geometry_estimate(mapped: u64, prototypes: u64, backend: Backend, layout: Bvh) -> Estimate {
+    // Only the mapped triangles' (top) BVH is ever compact.
+    let per_triangle = |compact: bool| match backend {
+        Backend::Embree if compact => GEOMETRY_BYTES_PER_TRIANGLE_EMBREE_COMPACT,
         Backend::Embree => GEOMETRY_BYTES_PER_TRIANGLE_EMBREE,
         Backend::Obvhs => GEOMETRY_BYTES_PER_TRIANGLE_OBVHS,
     };
-    let n = triangles as f64;
+    let compact = layout == Bvh::Compact;
+    let triangles = mapped.saturating_add(prototypes);
+    let what = match prototypes {
+        0 => format!("objects: {triangles} triangles"),
+        _ => format!("objects: {triangles} triangles ({prototypes} in instanced prototypes)"),
+    };
     let mut e = Estimate::default();
     e.push(
-        format!("objects: {triangles} triangles"),
+        what,
         match backend {
             Backend::Embree => "of geometry and embree BVH",
             Backend::Obvhs => "of geometry and obvhs BVH",
         },
-        n * per_triangle,
+        mapped as f64 * per_triangle(compact) + prototypes as f64 * per_triangle(false),
     );
     e.push(
-        format!("triangle map: {triangles} triangles × {CODES_PER_TRIANGLE} slots"),
+        format!("triangle map: {mapped} triangles × {CODES_PER_TRIANGLE} slots"),
         "of tallies",
         // u32 counts (`tally::TriangleCounts`; u64 only past 4.3·10⁹ hits in a slot).
-        n * (CODES_PER_TRIANGLE * size_of::<u32>()) as f64,
+        mapped as f64 * (CODES_PER_TRIANGLE * size_of::<u32>()) as f64,
     );
     e
 }
@@ -296,7 +304,11 @@ pub fn check_run(
 ) -> Result<Bvh> {
     crate::run::check_threads(options.threads)?;
     let origin = scene.path.display().to_string();
-    let triangles = scene.geometry.triangle_count() as u64;
+    let g = &scene.geometry;
+    let (mapped, prototypes) = (
+        g.triangle_count() as u64,
+        g.instanced.stored_triangle_count() as u64,
+    );
     let run = photon_pass.then(|| photon_pass_estimate(scene, options));
     let eye = camera.map(|c| render_estimate(scene, c, options.threads));
     // The photon pass's tallies are gone when the eye pass starts: the larger counts.
@@ -306,7 +318,7 @@ pub fn check_run(
         (None, e) => e.unwrap_or_default(),
     };
     let with_layout = |layout| {
-        let mut estimate = geometry_estimate(triangles, options.backend, layout);
+        let mut estimate = geometry_estimate(mapped, prototypes, options.backend, layout);
         estimate.parts.extend(rest.parts.iter().cloned());
         estimate
     };
@@ -332,8 +344,9 @@ pub fn choose_bvh(choice: Bvh, backend: Backend, fits: impl Fn(Bvh) -> bool) -> 
 
 /// Before tessellating: the triangles the scene file's built-in shapes will make (mesh
 /// files are counted once loaded, by [`check_run`]) against `budget`, so a file of many
-/// finely subdivided spheres is refused before the loader builds them. A file that does
-/// not parse passes: the loader reports it.
+/// finely subdivided spheres is refused before the loader builds them: a mapped shape's
+/// triangles with a map for every copy, an instanced one's once without. A file that
+/// does not parse passes: the loader reports it.
 pub fn check_scene_file(path: &Path, backend: Backend, layout: Bvh, budget: &Budget) -> Result<()> {
     if budget.bytes.is_none() {
         return Ok(());
@@ -345,19 +358,28 @@ pub fn check_scene_file(path: &Path, backend: Backend, layout: Bvh, budget: &Bud
     let Ok(raw) = file::parse(&text, &origin) else {
         return Ok(());
     };
-    let triangles: u64 = raw
-        .objects
-        .into_iter()
-        .filter_map(
-            |value| match file::object(value, &origin, "objects").ok()?.source {
-                Source::Shape(shape) => shape.triangle_count(),
-                Source::File(_) => None,
-            },
-        )
-        .fold(0, u64::saturating_add);
+    let (mut mapped, mut prototypes) = (0u64, 0u64);
+    for value in raw.objects {
+        let Ok(entry) = file::object(value, &origin, "objects") else {
+            continue;
+        };
+        let Source::Shape(shape) = &entry.source else {
+            continue;
+        };
+        let Some(triangles) = shape.triangle_count() else {
+            continue;
+        };
+        if entry.object.mapped() {
+            let copies = triangles.saturating_mul(entry.object.copy_count());
+            mapped = mapped.saturating_add(copies);
+        } else {
+            prototypes = prototypes.saturating_add(triangles);
+        }
+    }
     // Refused only if the smallest BVH the run may choose would not fit.
     let smallest = choose_bvh(layout, backend, |_| false);
-    budget.check(&origin, &geometry_estimate(triangles, backend, smallest))
+    let estimate = geometry_estimate(mapped, prototypes, backend, smallest);
+    budget.check(&origin, &estimate)
 }
 
 /// Memory available to this process now (bytes): `MemAvailable` of /proc/meminfo,

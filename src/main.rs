@@ -375,8 +375,8 @@ fn note_bvh(args: &RunArgs, options: &RunOptions) {
     }
 }
 
-/// The photon pass shared by `run` and `render`: runs with all stop criteria and writes
-/// summary.json and the indirect map (`render --from` reads it) into `out`.
+/// The photon pass shared by `run` and `render`: runs with all stop criteria, saving
+/// checkpoints into `out`; `finish_run` writes its outputs.
 fn photon_pass(
     args: &RunArgs,
     scene: &Scene,
@@ -385,7 +385,7 @@ fn photon_pass(
     setup: Instant,
     out: &Path,
     distributor: Option<Box<dyn Distributor>>,
-) -> Result<(RunResult, Option<summary::Summary>)> {
+) -> Result<RunResult> {
     let interrupt = Arc::new(AtomicBool::new(false));
     {
         let flag = interrupt.clone();
@@ -427,11 +427,13 @@ fn photon_pass(
         start,
     )?;
     if let Some(c) = &observer.checkpoints {
-        if let Some((waited, written, bytes)) = c.last_cost {
+        if let Some(cost) = c.last_cost {
             observer.progress.println(format!(
-                "checkpoint: {:.1} MB written in {written:.3} s; the run waited {waited:.3} s \
+                "checkpoint: {:.1} MB written in {:.3} s; the run waited {:.3} s \
                  for it, {:.3} s for all {} saves",
-                bytes as f64 / 1e6,
+                cost.bytes as f64 / 1e6,
+                cost.written_s,
+                cost.waited_s,
                 c.total_s,
                 c.saves
             ));
@@ -456,10 +458,25 @@ fn photon_pass(
                 out.display()
             );
         }
-        return Ok((result, None));
     }
-    let s = write_outputs(out, scene, options, &result, outputs_of(args)?)?;
-    Ok((result, Some(s)))
+    Ok(result)
+}
+
+/// summary.json and the files `outputs` asks for, then the run's printed lines; nothing
+/// for a shard, whose checkpoint is its output.
+fn finish_run(
+    args: &RunArgs,
+    out: &Path,
+    scene: &Scene,
+    options: &RunOptions,
+    result: &RunResult,
+    outputs: luxtally::output::Outputs,
+) -> Result<()> {
+    if result.shard.is_none() {
+        let s = write_outputs(out, scene, options, result, outputs)?;
+        print_run(args, &s, out);
+    }
+    Ok(())
 }
 
 /// `--outputs`, all files when absent.
@@ -623,15 +640,21 @@ fn run_command(args: RunArgs) -> Result<()> {
     let budget = budget_for(&args)?;
     let scene = luxtally::scene::load(&args.scene)?;
     let mut options = run_options(&args, &scene)?;
-    outputs_of(&args)?;
+    let outputs = outputs_of(&args)?;
     options.bvh = limits::check_run(&scene, &options, None, true, &budget)?;
     note_bvh(&args, &options);
     let dir = out_dir(args.out.as_deref().or(args.resume.as_deref()), &scene)?;
-    dir.keep_on(run_into(&args, &scene, &options, &dir.path))
+    dir.keep_on(run_into(&args, outputs, &scene, &options, &dir.path))
 }
 
 /// `run` once its output folder exists.
-fn run_into(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> Result<()> {
+fn run_into(
+    args: &RunArgs,
+    outputs: luxtally::output::Outputs,
+    scene: &Scene,
+    options: &RunOptions,
+    out: &Path,
+) -> Result<()> {
     let setup = Instant::now();
     let caster = accel::build_with(options.backend, options.bvh, &scene.geometry)?;
     #[cfg(feature = "mpi")]
@@ -645,7 +668,7 @@ fn run_into(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> 
         }
         distributor = Some(Box::new(c.root(!args.quiet)));
     }
-    let (_, summary) = photon_pass(
+    let result = photon_pass(
         args,
         scene,
         options,
@@ -654,10 +677,7 @@ fn run_into(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> 
         out,
         distributor,
     )?;
-    if let Some(s) = summary {
-        print_run(args, &s, out);
-    }
-    Ok(())
+    finish_run(args, out, scene, options, &result, outputs)
 }
 
 /// `render`: the photon pass (or a saved map with --from), then the eye pass.
@@ -665,8 +685,8 @@ fn render_command(args: RenderArgs) -> Result<()> {
     let budget = budget_for(&args.run)?;
     let mut scene = luxtally::scene::load(&args.run.scene)?;
     let mut options = run_options(&args.run, &scene)?;
-    outputs_of(&args.run)?;
     // Checked before the photon pass, which may be long.
+    let outputs = outputs_of(&args.run)?;
     let mut camera = render::camera_of(&scene)?.clone();
     if args.no_interpolation {
         camera.interpolate = false;
@@ -694,29 +714,28 @@ fn render_command(args: RenderArgs) -> Result<()> {
             .or(args.run.resume.as_deref()),
         &scene,
     )?;
-    dir.keep_on(render_into(&args, &scene, &options, &camera, &dir.path))
+    dir.keep_on(render_into(
+        &args, outputs, &scene, &options, &camera, &dir.path,
+    ))
 }
 
 /// `render` once its output folder exists: the photon pass (or the saved map), then
 /// the image.
 fn render_into(
     args: &RenderArgs,
+    outputs: luxtally::output::Outputs,
     scene: &Scene,
     options: &RunOptions,
     camera: &luxtally::scene::Camera,
     out: &Path,
 ) -> Result<()> {
-    let outputs = outputs_of(&args.run)?;
     let setup = Instant::now();
     let caster = accel::build_with(options.backend, options.bvh, &scene.geometry)?;
     let map = match &args.from {
         Some(dir) => IndirectMap::load(&dir.join(MAP_FILE), scene)?,
         None => {
-            let (result, summary) =
-                photon_pass(&args.run, scene, options, caster.as_ref(), setup, out, None)?;
-            if let Some(s) = &summary {
-                print_run(&args.run, s, out);
-            }
+            let result = photon_pass(&args.run, scene, options, caster.as_ref(), setup, out, None)?;
+            finish_run(&args.run, out, scene, options, &result, outputs)?;
             IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
         }
     };

@@ -342,6 +342,9 @@ struct Epochs<'r, 's> {
     schedule: DirectSchedule,
     history: Vec<HistoryPoint>,
     forecast: Option<Forecast>,
+    /// The fewest hits in a cell of the target after the last epoch, when `--min-hits`
+    /// asks and the target is a receiver's.
+    fewest_hits: Option<u64>,
     /// A shard's per-chunk partials, for the merge.
     chunk_log: Vec<ChunkRecord>,
     /// Chunk tallies reused from epoch to epoch (in chunk order, so the merge order
@@ -397,6 +400,7 @@ impl<'r, 's> Epochs<'r, 's> {
             },
             history: resumed.history,
             forecast: None,
+            fewest_hits: None,
             chunk_log: resumed.chunks,
             buffers: Vec::new(),
             elapsed_before_s: resumed.elapsed_s,
@@ -470,7 +474,8 @@ impl<'r, 's> Epochs<'r, 's> {
     }
 
     /// The statistics after an epoch: the target's error into the history, with the
-    /// forecast when there is an error target; then the stop check.
+    /// forecast when there is an error target, and the fewest hits when `--min-hits`
+    /// asks; then the stop check.
     fn evaluate(&mut self, elapsed_s: f64, interrupt: &AtomicBool) -> Option<StopReason> {
         let stats_start = Instant::now();
         let scene = self.scene;
@@ -496,6 +501,16 @@ impl<'r, 's> Epochs<'r, 's> {
             point.forecast_photons = self.forecast.map(|f| f.photons);
             *self.history.last_mut().expect("pushed above") = point;
         }
+        // One pass over the target's cells, read by the stop check and the next
+        // epoch's size.
+        self.fewest_hits = match (stop.min_hits, self.target.receiver()) {
+            (Some(_), Some(r)) => Some(min_hits(
+                &self.target,
+                &scene.receivers,
+                self.tallies.receiver_cells(&scene.receivers, r),
+            )),
+            _ => None,
+        };
         let reason = self.stop_reason(error, elapsed_s, interrupt);
         self.stats_s += stats_start.elapsed().as_secs_f64();
         reason
@@ -513,7 +528,7 @@ impl<'r, 's> Epochs<'r, 's> {
             Some(StopReason::TargetError)
         } else if stop
             .min_hits
-            .is_some_and(|n| self.fewest_hits().is_some_and(|h| h >= n))
+            .is_some_and(|n| self.fewest_hits.is_some_and(|h| h >= n))
         {
             Some(StopReason::MinHits)
         } else if self.tallies.photons >= self.max_photons {
@@ -527,23 +542,12 @@ impl<'r, 's> Epochs<'r, 's> {
         }
     }
 
-    /// The fewest hits in a cell of the target, if it is a receiver's.
-    fn fewest_hits(&self) -> Option<u64> {
-        let receivers = &self.scene.receivers;
-        let r = self.target.receiver()?;
-        Some(min_hits(
-            &self.target,
-            receivers,
-            self.tallies.receiver_cells(receivers, r),
-        ))
-    }
-
     /// The photon count at which a stop is predicted: the error forecast's, or the
     /// projection of `--min-hits` (hits grow in proportion to photons), whichever is
     /// nearer.
     fn goal_photons(&self) -> Option<u64> {
         let hits_goal = self.options.stop.min_hits.and_then(|n| {
-            let fewest = self.fewest_hits()?;
+            let fewest = self.fewest_hits?;
             (fewest > 0).then(|| (self.tallies.photons as f64 * n as f64 / fewest as f64) as u64)
         });
         [self.forecast.map(|f| f.photons), hits_goal]

@@ -279,7 +279,7 @@ fn the_compact_bvh_is_chosen_when_the_fast_one_would_not_fit() {
     // One sphere of 1.3 M triangles; a budget between its compact and fast estimates.
     let scene = spheres(&dir, 1, 8);
     let triangles = 20 * 4u64.pow(8);
-    let need = |bvh| limits::geometry_estimate(triangles, Backend::Embree, bvh).total_bytes();
+    let need = |bvh| limits::geometry_estimate(triangles, 0, Backend::Embree, bvh).total_bytes();
     let (fast, compact) = (need(Bvh::Fast), need(Bvh::Compact));
     assert!(compact < fast, "compact {compact} B, fast {fast} B");
     let between = format!("{}", ((fast + compact) / 2.0) as u64);
@@ -336,7 +336,74 @@ fn choose_bvh_prefers_speed_while_memory_allows() {
     // An unknown budget holds anything.
     assert!(Budget::unlimited().fits(&limits::geometry_estimate(
         1 << 40,
+        0,
         Backend::Embree,
         Bvh::Fast
     )));
+}
+
+/// One sphere of 1.3 M triangles (subdivision 8) with `keys` added to its object, and a
+/// light.
+fn sphere_with(dir: &Path, keys: &str) -> PathBuf {
+    let text = format!(
+        "[materials.m]\nreflectance = 0.5\n\
+         [[objects]]\nshape = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nsubdivisions = 8\nmaterial = \"m\"\n{keys}\n\
+         [[lights]]\ntype = \"point\"\nposition = [0, 0, 5]\nintensity_cd = 100\n"
+    );
+    let path = dir.join("sphere.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn instanced_prototypes_triangles_count_in_a_runs_memory() {
+    let dir = temp_dir("prototypes");
+    // Unmapped: no triangle in the map, 1.3 M stored once for the instances (167 MB of
+    // geometry and BVH), which 64 MB cannot hold.
+    let scene = luxtally::scene::load(&sphere_with(
+        &dir,
+        "map = false\ninstances = [{}, {translate = [3, 0, 0]}]",
+    ))
+    .unwrap();
+    assert_eq!(scene.geometry.triangle_count(), 0);
+    let mut options = luxtally::run::RunOptions::from_scene(&scene);
+    options.stop.photons = Some(4096);
+    let budget = Budget::new(Some("64M")).unwrap();
+    let err = limits::check_run(&scene, &options, None, true, &budget)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("objects: 1310720 triangles (1310720 in instanced prototypes) need"),
+        "{err}"
+    );
+}
+
+#[test]
+fn scene_file_check_maps_only_mapped_shapes_and_maps_every_copy() {
+    let dir = temp_dir("shape-maps");
+    let per_triangle = limits::GEOMETRY_BYTES_PER_TRIANGLE_EMBREE;
+    let triangles = 1_310_720.0;
+    // Between the sphere's geometry alone and its geometry with a triangle map: an
+    // unmapped sphere fits.
+    let geometry = triangles * per_triangle;
+    let budget = Budget {
+        bytes: Some((geometry * 1.1) as u64),
+        from_flag: true,
+    };
+    let unmapped = sphere_with(&dir, "map = false");
+    limits::check_scene_file(&unmapped, Backend::Embree, Bvh::Auto, &budget).unwrap();
+    // A mapped sphere in two copies holds two maps and twice the geometry, beyond a
+    // budget that holds one mapped copy.
+    let mapped = sphere_with(
+        &dir,
+        "map = true\ngrid = {count = [2, 1], spacing = [3, 0]}",
+    );
+    let budget = Budget {
+        bytes: Some((geometry * 1.5) as u64),
+        from_flag: true,
+    };
+    let err = limits::check_scene_file(&mapped, Backend::Embree, Bvh::Auto, &budget)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("objects: 2621440 triangles need"), "{err}");
 }

@@ -185,13 +185,7 @@ pub fn load_entry(
     cx: &mut LoadContext,
 ) -> Result<Vec<Labelled>> {
     let at = format!("{origin}: {label}");
-    let names = || {
-        let quoted: Vec<String> = KINDS.iter().map(|k| format!("\"{}\"", k.name)).collect();
-        match quoted.split_last() {
-            Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
-            _ => quoted.join(""),
-        }
-    };
+    let names = || input::or_list(KINDS.iter().map(|k| format!("\"{}\"", k.name)));
     let toml::Value::Table(mut table) = value else {
         return Err(Error::input(at, "must be a table"));
     };

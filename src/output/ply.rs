@@ -12,7 +12,7 @@
 use crate::raster::palette::{normalise, viridis};
 use crate::raster::{quantile, Rank};
 use crate::run::RunState;
-use crate::scene::adjacency::VertexFaces;
+use crate::scene::adjacency::vertex_means;
 use crate::stats::{triangle_illuminance_lx, MapKind, REL_ERROR_UNKNOWN};
 use std::io::Write;
 
@@ -63,14 +63,9 @@ pub fn scene_map_ply(state: &RunState<'_>) -> Vec<u8> {
 pub fn write_scene_map_ply(state: &RunState<'_>, out: &mut impl Write) -> std::io::Result<()> {
     let g = &state.scene.geometry;
     let faces = face_map(state);
-    let adjacent = VertexFaces::new(&g.triangles, g.vertices.len());
-    let vertex_lx: Vec<f64> = (0..g.vertices.len())
-        .map(|v| {
-            adjacent
-                .area_weighted_mean(v, &g.area_m2, |_| true, |j| [faces.illuminance_lx[j]])
-                .map_or(0.0, |[e]| e)
-        })
-        .collect();
+    let vertex_lx = vertex_means(&g.triangles, g.vertices.len(), &g.area_m2, |j| {
+        faces.illuminance_lx[j]
+    });
     let scale = quantile(&vertex_lx, 0.99, Rank::Nearest, f64::is_finite);
 
     let header = format!(

@@ -1,6 +1,31 @@
 //! Which triangles share each vertex, and the area-weighted vertex average of face
 //! values over them: the one rule behind the scene map's vertex illuminance
-//! (`output::ply`) and the eye pass's interpolated indirect light (`render::map`).
+//! (`output::ply`, every face: [`vertex_means`]) and the eye pass's interpolated indirect
+//! light (`render::map`, faces filtered: [`VertexFaces::area_weighted_mean`]).
+
+/// Σ a_j·value(j) / Σ a_j over every triangle j of each vertex (0 where their area is
+/// 0): [`VertexFaces::area_weighted_mean`] with no filter, summed in the same triangle
+/// order (same bits) without building the adjacency.
+pub fn vertex_means(
+    triangles: &[[u32; 3]],
+    vertex_count: usize,
+    area_m2: &[f64],
+    value: impl Fn(usize) -> f64,
+) -> Vec<f64> {
+    let mut sum = vec![0.0f64; vertex_count];
+    let mut area = vec![0.0f64; vertex_count];
+    for (j, t) in triangles.iter().enumerate() {
+        let (a, x) = (area_m2[j], value(j));
+        for &v in t {
+            sum[v as usize] += a * x;
+            area[v as usize] += a;
+        }
+    }
+    for (s, &a) in sum.iter_mut().zip(&area) {
+        *s = if a > 0.0 { *s / a } else { 0.0 };
+    }
+    sum
+}
 
 /// Vertex → adjacent triangles, in triangle order (compressed rows).
 pub struct VertexFaces {
@@ -74,5 +99,22 @@ mod tests {
             vf.area_weighted_mean(4, &[1.0, 3.0], |_| true, |_| [1.0]),
             None
         );
+    }
+
+    #[test]
+    fn vertex_means_are_the_unfiltered_means_bit_for_bit() {
+        let triangles = [[0, 1, 2], [0, 2, 3], [3, 2, 4], [1, 1, 2]];
+        let area_m2 = [0.1, 0.3, 0.7, 0.0];
+        let value = |j: usize| [1.0 / 3.0, 7.1, 0.2, 5.0][j];
+        let vf = VertexFaces::new(&triangles, 6);
+        let means = vertex_means(&triangles, 6, &area_m2, value);
+        for (v, &m) in means.iter().enumerate() {
+            let expected = vf.area_weighted_mean(v, &area_m2, |_| true, |j| [value(j)]);
+            assert_eq!(
+                m.to_bits(),
+                expected.map_or(0.0, |[e]| e).to_bits(),
+                "vertex {v}"
+            );
+        }
     }
 }

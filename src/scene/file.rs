@@ -86,29 +86,73 @@ pub struct SphereFile {
     pub subdivisions: Option<u32>,
 }
 
-/// The shapes by name, with the keys each takes.
-const SHAPES: [(&str, input::Fields); 3] = [
-    ("box", input::fields_of::<BoxFile>),
-    ("rect", input::fields_of::<RectFile>),
-    ("sphere", input::fields_of::<SphereFile>),
+/// A built-in shape's keys: `shape = NAME` selects them.
+trait ShapeKeys: serde::de::DeserializeOwned {
+    const NAME: &'static str;
+    fn into_shape(self) -> ShapeFile;
+}
+
+impl ShapeKeys for BoxFile {
+    const NAME: &'static str = "box";
+    fn into_shape(self) -> ShapeFile {
+        ShapeFile::Box(self)
+    }
+}
+
+impl ShapeKeys for RectFile {
+    const NAME: &'static str = "rect";
+    fn into_shape(self) -> ShapeFile {
+        ShapeFile::Rect(self)
+    }
+}
+
+impl ShapeKeys for SphereFile {
+    const NAME: &'static str = "sphere";
+    fn into_shape(self) -> ShapeFile {
+        ShapeFile::Sphere(self)
+    }
+}
+
+/// One row of [`SHAPES`]: a shape's name, the keys it takes and how its entry is read.
+struct ShapeKind {
+    name: &'static str,
+    fields: input::Fields,
+    read: fn(toml::Value, &str, &str) -> Result<ShapeFile>,
+}
+
+impl ShapeKind {
+    const fn of<S: ShapeKeys>() -> ShapeKind {
+        ShapeKind {
+            name: S::NAME,
+            fields: input::fields_of::<S>,
+            read: |value, origin, path| Ok(input::entry::<S>(value, origin, path)?.into_shape()),
+        }
+    }
+}
+
+/// The built-in shapes: what `shape = ...` may say.
+const SHAPES: [ShapeKind; 3] = [
+    ShapeKind::of::<BoxFile>(),
+    ShapeKind::of::<RectFile>(),
+    ShapeKind::of::<SphereFile>(),
 ];
 
 impl ShapeFile {
     pub fn name(&self) -> &'static str {
         match self {
-            ShapeFile::Box(_) => "box",
-            ShapeFile::Rect(_) => "rect",
-            ShapeFile::Sphere(_) => "sphere",
+            ShapeFile::Box(_) => BoxFile::NAME,
+            ShapeFile::Rect(_) => RectFile::NAME,
+            ShapeFile::Sphere(_) => SphereFile::NAME,
         }
     }
 
-    /// Triangles it will make, before it is built (`shapes::triangle_count`).
+    /// Triangles it will make, known before it is built.
     pub fn triangle_count(&self) -> Option<u64> {
-        let subdivisions = match self {
-            ShapeFile::Sphere(s) => s.subdivisions,
-            _ => None,
-        };
-        shapes::triangle_count(self.name(), subdivisions)
+        match self {
+            ShapeFile::Box(_) => Some(shapes::BOX_TRIANGLES),
+            ShapeFile::Rect(_) => Some(shapes::RECT_TRIANGLES),
+            ShapeFile::Sphere(s) => shapes::sphere_triangle_count(s.subdivisions),
+        }
     }
 }
 
@@ -129,6 +173,23 @@ pub struct ObjectFile {
     pub grid: Option<GridFile>,
 }
 
+impl ObjectFile {
+    /// Whether its triangles are flattened into the scene map: `map`, by default unless
+    /// it has copies (`instances` or `grid`), which are otherwise instanced.
+    pub fn mapped(&self) -> bool {
+        self.map
+            .unwrap_or(self.instances.is_none() && self.grid.is_none())
+    }
+
+    /// Copies it makes: each `instances` entry (one without) at each `grid` point
+    /// (saturating: the loader refuses past `load::MAX_INSTANCES`).
+    pub fn copy_count(&self) -> u64 {
+        let listed = self.instances.as_ref().map_or(1, |l| l.len() as u64);
+        let [nx, ny] = self.grid.map_or([1, 1], |g| g.count);
+        nx.saturating_mul(ny).saturating_mul(listed)
+    }
+}
+
 /// Reads `[[objects]]` entry `path` (`objects[i]`): `shape` or `file` says what it is;
 /// keys of another shape are reported as not applying to this one (or to a mesh file).
 pub fn object(value: toml::Value, origin: &str, path: &str) -> Result<ObjectEntry> {
@@ -147,7 +208,7 @@ pub fn object(value: toml::Value, origin: &str, path: &str) -> Result<ObjectEntr
         .into_iter()
         .partition(|(k, _)| common.contains(&k.as_str()));
     let object = input::entry(toml::Value::Table(own), origin, path)?;
-    let others: Vec<&[&str]> = SHAPES.iter().map(|(_, f)| f()).collect();
+    let others: Vec<&[&str]> = SHAPES.iter().map(|k| (k.fields)()).collect();
     let source = match (shape, file) {
         (Some(_), Some(_)) => {
             return Err(Error::input(at, "give either `shape` or `file`, not both"));
@@ -158,19 +219,16 @@ pub fn object(value: toml::Value, origin: &str, path: &str) -> Result<ObjectEntr
             Source::File(file)
         }
         (Some(shape), None) => {
-            let Some((name, fields)) = SHAPES.iter().find(|(n, _)| *n == shape) else {
+            let Some(kind) = SHAPES.iter().find(|k| k.name == shape) else {
+                let names = input::or_list(SHAPES.iter().map(|k| format!("\"{}\"", k.name)));
                 return Err(Error::input(
                     format!("{at}.shape"),
-                    format!("unknown shape `{shape}` (expected \"box\", \"rect\" or \"sphere\")"),
+                    format!("unknown shape `{shape}` (expected {names})"),
                 ));
             };
-            check_keys(&rest, fields(), &others, &at, &format!("shape \"{name}\""))?;
-            let rest = toml::Value::Table(rest);
-            Source::Shape(match *name {
-                "box" => ShapeFile::Box(input::entry(rest, origin, path)?),
-                "rect" => ShapeFile::Rect(input::entry(rest, origin, path)?),
-                _ => ShapeFile::Sphere(input::entry(rest, origin, path)?),
-            })
+            let what = format!("shape \"{}\"", kind.name);
+            check_keys(&rest, (kind.fields)(), &others, &at, &what)?;
+            Source::Shape((kind.read)(toml::Value::Table(rest), origin, path)?)
         }
     };
     Ok(ObjectEntry { source, object })

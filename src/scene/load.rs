@@ -19,7 +19,7 @@ use crate::criteria::{self, StopCriteria};
 use crate::error::{Error, Result};
 use crate::input::{direction, required, vec3};
 use crate::light::{self, LoadContext};
-use glam::{DAffine3, DMat3, DVec3};
+use glam::{DAffine3, DVec3};
 use std::path::{Path, PathBuf};
 
 /// Loads and validates the scene file at `path`; relative mesh paths resolve against its
@@ -145,7 +145,6 @@ struct GeometryBuilder {
 
 impl GeometryBuilder {
     fn add(&mut self, mesh: Mesh, materials: &[u32], object: u32, at: &str) -> Result<()> {
-        self.check_mapped(mesh.triangles.len() as u64, at)?;
         // Geometry indexes vertices with u32.
         if self.vertices.len() + mesh.vertices.len() > u32::MAX as usize {
             return Err(Error::input(
@@ -230,7 +229,7 @@ fn load_object(
     };
     let transform = transform(o, &at)?;
     let copies = copies(o, &at)?;
-    let mapped = o.map.unwrap_or(o.instances.is_none() && o.grid.is_none());
+    let mapped = o.mapped();
     let object = Placed {
         object: i as u32,
         transform,
@@ -240,16 +239,8 @@ fn load_object(
     let (prototypes, placements) = match &entry.source {
         Source::Shape(shape) => shape_prototype(shape, override_material, &object.at)?,
         Source::File(file) => {
-            let check = |per_file: u64| {
-                if mapped {
-                    let total = per_file.saturating_mul(object.copies.len() as u64);
-                    builder.check_mapped(total, &object.at)
-                } else {
-                    Ok(())
-                }
-            };
             let found = (override_material, base_dir);
-            file_prototypes(file, found, &object.at, materials, check)?
+            file_prototypes(file, found, &object.at, materials)?
         }
     };
     if mapped {
@@ -277,19 +268,16 @@ fn shape_prototype(shape: &ShapeFile, material: Option<u32>, at: &str) -> Result
 }
 
 /// A mesh file's prototypes and placements, in the object's material (`found.0`) or the
-/// file's own; `check` sees the triangle count of one flattened copy before materials
-/// are assigned. `found.1`: the scene file's directory.
+/// file's own. `found.1`: the scene file's directory.
 fn file_prototypes(
     file: &str,
     found: (Option<u32>, &Path),
     at: &str,
     materials: &mut Vec<Material>,
-    check: impl FnOnce(u64) -> Result<()>,
 ) -> Result<Prototypes> {
     let (override_material, base_dir) = found;
     let mesh_path = base_dir.join(file);
     let parts = mesh_io::load_mesh_parts(&mesh_path, &format!("{at}.file"))?;
-    check(parts.flattened_triangle_count())?;
     let mut protos = Vec::with_capacity(parts.prototypes.len());
     for (mesh, tri_material) in parts.prototypes {
         let material = match override_material {
@@ -358,7 +346,8 @@ impl Placed {
         Ok(())
     }
 
-    /// Mapped: flattened in f64, as every object was before instancing.
+    /// Mapped: flattened in f64, as every object was before instancing; refused before
+    /// the flattening allocates when its copies would pass [`MAX_MAPPED_TRIANGLES`].
     fn add_mapped(
         &self,
         builder: &mut GeometryBuilder,
@@ -383,19 +372,8 @@ impl Placed {
             return builder.add(mesh, &per_tri, self.object, at);
         }
         for copy in &self.copies {
-            let mirrored = copy.matrix3.determinant() < 0.0;
-            let placed = Mesh {
-                vertices: mesh
-                    .vertices
-                    .iter()
-                    .map(|p| copy.transform_point3(*p))
-                    .collect(),
-                triangles: mesh
-                    .triangles
-                    .iter()
-                    .map(|t| if mirrored { [t[0], t[2], t[1]] } else { *t })
-                    .collect(),
-            };
+            let mut placed = Mesh::default();
+            append_placed(&mut placed, (&mesh.vertices, &mesh.triangles), Some(copy));
             builder.add(placed, &per_tri, self.object, at)?;
         }
         Ok(())
@@ -403,32 +381,40 @@ impl Placed {
 }
 
 /// The prototypes at their placements as one mesh in the object's frame, with each
-/// triangle's material; a mirroring placement reverses its triangles' winding.
+/// triangle's material.
 fn flatten(prototypes: &[PrototypeMesh], placements: &[(u32, DAffine3)]) -> (Mesh, Vec<u32>) {
     let mut mesh = Mesh::default();
     let mut per_tri = Vec::new();
     for (proto, node) in placements {
         let pm = &prototypes[*proto as usize];
-        let base = mesh.vertices.len() as u32;
-        let identity = *node == DAffine3::IDENTITY;
-        mesh.vertices.extend(pm.vertices.iter().map(|p| {
-            if identity {
-                *p
-            } else {
-                node.transform_point3(*p)
-            }
-        }));
-        let mirrored = node.matrix3.determinant() < 0.0;
-        mesh.triangles.extend(pm.triangles.iter().map(|t| {
-            let mut t = t.map(|k| k + base);
-            if mirrored {
-                t.swap(1, 2);
-            }
-            t
-        }));
+        // An identity node leaves the vertices' bits as the file has them (-0.0 stays).
+        let moved = (*node != DAffine3::IDENTITY).then_some(node);
+        append_placed(&mut mesh, (&pm.vertices, &pm.triangles), moved);
         per_tri.extend_from_slice(&pm.material);
     }
     (mesh, per_tri)
+}
+
+/// Appends `part` (vertices, triangles) to `mesh`, moved by `m` (`None`: as it is); a
+/// mirroring `m` reverses the triangles' winding, so their normals keep facing out.
+fn append_placed(mesh: &mut Mesh, part: (&[DVec3], &[[u32; 3]]), m: Option<&DAffine3>) {
+    let (vertices, triangles) = part;
+    let base = mesh.vertices.len() as u32;
+    match m {
+        Some(m) => mesh
+            .vertices
+            .extend(vertices.iter().map(|p| m.transform_point3(*p))),
+        None => mesh.vertices.extend_from_slice(vertices),
+    }
+    let mirrored = m.is_some_and(|m| m.matrix3.determinant() < 0.0);
+    mesh.triangles.extend(triangles.iter().map(|t| {
+        let t = t.map(|k| k + base);
+        if mirrored {
+            [t[0], t[2], t[1]]
+        } else {
+            t
+        }
+    }));
 }
 
 /// The copies of an object (applied after its own transform): each `instances` entry
@@ -455,7 +441,7 @@ fn copies(o: &ObjectFile, at: &str) -> Result<Vec<DAffine3>> {
             format!("zero copies: {:?} (each must be ≥ 1)", grid.count),
         ));
     }
-    let total = nx.saturating_mul(ny).saturating_mul(list.len() as u64);
+    let total = o.copy_count();
     if total > MAX_INSTANCES {
         return Err(Error::input(
             format!("{at}.grid.count"),
@@ -485,14 +471,11 @@ fn instance_transform(inst: &InstanceFile, at: &str) -> Result<DAffine3> {
         return Err(Error::input(format!("{at}.scale"), "must not be 0"));
     }
     let t = Transform {
-        scale: DVec3::ONE,
+        scale,
         rotate_deg: inst.rotate_deg.map_or(DVec3::ZERO, vec3),
         translate: inst.translate.map_or(DVec3::ZERO, vec3),
     };
-    Ok(DAffine3::from_mat3_translation(
-        t.rotation() * DMat3::from_diagonal(scale),
-        t.translate,
-    ))
+    Ok(t.affine())
 }
 
 /// Turns a mesh file's own materials into scene materials named `FILE:NAME`; a scene

@@ -86,16 +86,6 @@ pub struct MeshParts {
     pub missing_reason: Option<String>,
 }
 
-impl MeshParts {
-    /// Triangles of the flattened file.
-    pub fn flattened_triangle_count(&self) -> u64 {
-        self.placements
-            .iter()
-            .map(|(p, _)| self.prototypes[*p as usize].0.triangles.len() as u64)
-            .sum()
-    }
-}
-
 /// Loads `path` by extension as prototypes and placements, nothing copied.
 pub fn load_mesh_parts(path: &Path, origin: &str) -> Result<MeshParts> {
     let ext = path

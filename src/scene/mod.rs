@@ -348,9 +348,7 @@ impl Estimator {
 
     /// The names, for messages: "track, next_event or auto".
     pub fn expected() -> String {
-        let names: Vec<&str> = Estimator::ALL.iter().map(|e| e.name()).collect();
-        let (last, rest) = names.split_last().expect("at least one estimator");
-        format!("{} or {last}", rest.join(", "))
+        crate::input::or_list(Estimator::ALL.iter().map(|e| e.name()))
     }
 
     /// The direct light (photons' first segments) is sampled as independent replicates

@@ -55,18 +55,16 @@ pub fn make_rect(corner: DVec3, u: DVec3, v: DVec3) -> Mesh {
 pub const DEFAULT_SPHERE_SUBDIVISIONS: u32 = 3;
 pub const MAX_SPHERE_SUBDIVISIONS: u32 = 8;
 
-/// Triangles a built-in shape makes, known before it is built (so a scene can be sized
-/// before it is tessellated); `None` for an unknown shape or subdivisions out of range.
-pub fn triangle_count(shape: &str, subdivisions: Option<u32>) -> Option<u64> {
-    match shape {
-        "box" => Some(12),
-        "rect" => Some(2),
-        "sphere" => {
-            let s = subdivisions.unwrap_or(DEFAULT_SPHERE_SUBDIVISIONS);
-            (s <= MAX_SPHERE_SUBDIVISIONS).then(|| 20 << (2 * s))
-        }
-        _ => None,
-    }
+/// Triangles of [`make_box`] and [`make_rect`], known before they are built (so a scene
+/// can be sized before it is tessellated).
+pub const BOX_TRIANGLES: u64 = 12;
+pub const RECT_TRIANGLES: u64 = 2;
+
+/// Triangles of [`make_sphere`] with `subdivisions` (default when `None`); `None` out
+/// of range.
+pub fn sphere_triangle_count(subdivisions: Option<u32>) -> Option<u64> {
+    let s = subdivisions.unwrap_or(DEFAULT_SPHERE_SUBDIVISIONS);
+    (s <= MAX_SPHERE_SUBDIVISIONS).then(|| 20 << (2 * s))
 }
 
 /// Icosphere: an icosahedron whose faces are split in four `subdivisions` times, vertices
@@ -191,19 +189,19 @@ mod tests {
     fn triangle_counts_match_the_shapes_built() {
         let (o, x) = (DVec3::ZERO, DVec3::X);
         assert_eq!(
-            triangle_count("box", None),
-            Some(make_box(o, DVec3::ONE).triangles.len() as u64)
+            BOX_TRIANGLES,
+            make_box(o, DVec3::ONE).triangles.len() as u64
         );
         assert_eq!(
-            triangle_count("rect", None),
-            Some(make_rect(o, x, DVec3::Y).triangles.len() as u64)
+            RECT_TRIANGLES,
+            make_rect(o, x, DVec3::Y).triangles.len() as u64
         );
         for s in 0..=4 {
             let built = make_sphere(o, 1.0, s).triangles.len() as u64;
-            assert_eq!(triangle_count("sphere", Some(s)), Some(built));
+            assert_eq!(sphere_triangle_count(Some(s)), Some(built));
         }
         assert_eq!(
-            triangle_count("sphere", None),
+            sphere_triangle_count(None),
             Some(
                 make_sphere(o, 1.0, DEFAULT_SPHERE_SUBDIVISIONS)
                     .triangles
@@ -211,9 +209,8 @@ mod tests {
             )
         );
         assert_eq!(
-            triangle_count("sphere", Some(MAX_SPHERE_SUBDIVISIONS + 1)),
+            sphere_triangle_count(Some(MAX_SPHERE_SUBDIVISIONS + 1)),
             None
         );
-        assert_eq!(triangle_count("torus", None), None);
     }
 }

@@ -201,13 +201,25 @@ impl TriangleCounts {
         }
     }
 
-    /// Adds `other` count by count (integers: any order gives the same sums).
+    /// Adds `other` count by count (integers: any order gives the same sums), widening
+    /// at the first sum past u32.
     pub fn add(&mut self, other: &TriangleCounts) {
-        for i in 0..self.len().min(other.len()) {
-            let n = other.get(i);
-            if n > 0 {
-                self.add_at(i, n);
-            }
+        use TriangleCounts::{Narrow, Wide};
+        let done = match (&mut *self, other) {
+            (Narrow(a), Narrow(b)) => add_narrow(a, b),
+            (Narrow(a), Wide(b)) => add_narrow(a, b),
+            (Wide(_), _) => 0,
+        };
+        if done == self.len().min(other.len()) {
+            return;
+        }
+        self.widen();
+        let Wide(a) = self else {
+            unreachable!("widened above")
+        };
+        match other {
+            Narrow(b) => add_wide(&mut a[done..], &b[done..]),
+            Wide(b) => add_wide(&mut a[done..], &b[done..]),
         }
     }
 
@@ -230,6 +242,31 @@ impl TriangleCounts {
     /// Every count as u64 (checkpoints).
     pub fn to_vec(&self) -> Vec<u64> {
         (0..self.len()).map(|i| self.get(i)).collect()
+    }
+}
+
+/// Adds `b` to `a` while the sums fit in u32; returns how many counts were added.
+/// Zero counts are skipped: `a`'s zeroed pages stay untouched.
+fn add_narrow<T: Copy + Into<u64>>(a: &mut [u32], b: &[T]) -> usize {
+    for (i, (x, &y)) in a.iter_mut().zip(b).enumerate() {
+        let y = y.into();
+        if y > 0 {
+            match u32::try_from(*x as u64 + y) {
+                Ok(sum) => *x = sum,
+                Err(_) => return i,
+            }
+        }
+    }
+    a.len().min(b.len())
+}
+
+/// Adds `b` to `a`, skipping zeros as [`add_narrow`] does.
+fn add_wide<T: Copy + Into<u64>>(a: &mut [u64], b: &[T]) {
+    for (x, &y) in a.iter_mut().zip(b) {
+        let y = y.into();
+        if y > 0 {
+            *x += y;
+        }
     }
 }
 
@@ -449,6 +486,10 @@ mod tests {
         d.add(&c);
         assert_eq!(d.to_vec(), vec![0, 2 * (u32::MAX as u64 + 1), 2]);
         assert_eq!(TriangleCounts::from(d.to_vec()), d);
+        // Two narrow arrays whose sum passes u32 in the middle: every count is added once.
+        let mut e = TriangleCounts::Narrow(vec![1, u32::MAX, 3]);
+        e.add(&TriangleCounts::Narrow(vec![1, 1, 1]));
+        assert_eq!(e, TriangleCounts::Wide(vec![2, u32::MAX as u64 + 1, 4]));
         assert_eq!(
             TriangleCounts::from(vec![5, 6]),
             TriangleCounts::Narrow(vec![5, 6])
