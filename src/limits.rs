@@ -44,6 +44,13 @@ pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE_COMPACT: f64 = 104.0;
 /// about 32 bytes since).
 pub const GEOMETRY_BYTES_PER_TRIANGLE_OBVHS: f64 = 260.0;
 
+/// Per instance of a `map = false` object (bytes): Embree's instance geometry and its
+/// share of the top-level BVH, our `Instance` (transform, normal matrix, bounds).
+/// Measured: 10⁶ instances of the bunny peaked at 504 MiB, 10² at 33 MiB (BENCHMARKS.md,
+/// "Scale"): 494 bytes per instance; obvhs's top-level BVH over instance bounds is
+/// smaller than Embree's.
+pub const BYTES_PER_INSTANCE: f64 = 512.0;
+
 /// Outputs per receiver cell at their peak (bytes): summary.json (the summary, its
 /// pretty JSON text), report.html (the summary as JSON data, then as text), the EXR, CSV
 /// and PNGs. Measured: a 2000 × 2000-cell receiver peaked at 1.70 GB RSS at the end of a
@@ -317,8 +324,16 @@ pub fn check_run(
         (Some(r), _) => r,
         (None, e) => e.unwrap_or_default(),
     };
+    let instances = g.instanced.instances.len();
     let with_layout = |layout| {
         let mut estimate = geometry_estimate(mapped, prototypes, options.backend, layout);
+        if instances > 0 {
+            estimate.push(
+                format!("objects: {instances} instances"),
+                "of instance transforms and BVH",
+                instances as f64 * BYTES_PER_INSTANCE,
+            );
+        }
         estimate.parts.extend(rest.parts.iter().cloned());
         estimate
     };

@@ -407,3 +407,27 @@ fn scene_file_check_maps_only_mapped_shapes_and_maps_every_copy() {
         .to_string();
     assert!(err.contains("objects: 2621440 triangles need"), "{err}");
 }
+
+#[test]
+fn instances_count_in_a_runs_memory() {
+    let dir = temp_dir("instances");
+    // 250,000 copies of a box (12 triangles): 3 M triangles if flattened, a few hundred
+    // bytes each as instances, which 64 MB cannot hold.
+    let text = "[materials.m]\nreflectance = 0.5\n\
+         [[objects]]\nshape = \"box\"\nmin = [0, 0, 0]\nmax = [0.1, 0.1, 0.1]\nmaterial = \"m\"\n\
+         map = false\ngrid = {count = [500, 500], spacing = [0.2, 0.2]}\n\
+         [[lights]]\ntype = \"point\"\nposition = [0, 0, 5]\nintensity_cd = 100\n";
+    let path = dir.join("boxes.toml");
+    std::fs::write(&path, text).unwrap();
+    let scene = luxtally::scene::load(&path).unwrap();
+    assert_eq!(scene.geometry.instanced.instances.len(), 250_000);
+    let mut options = luxtally::run::RunOptions::from_scene(&scene);
+    options.stop.photons = Some(4096);
+    let check = |size: &str| {
+        let budget = Budget::new(Some(size)).unwrap();
+        limits::check_run(&scene, &options, None, true, &budget)
+    };
+    let err = check("64M").unwrap_err().to_string();
+    assert!(err.contains("objects: 250000 instances need"), "{err}");
+    assert!(check("1G").is_ok());
+}
