@@ -408,6 +408,78 @@ pub fn triangle_face_illuminance_lx(
     total_flux_lm * count as f64 / (t.photons as f64 * area_m2)
 }
 
+/// Relative error of every triangle's total illuminance in the scene map (σ/E; NaN
+/// where no photon hit it: unknown).
+///
+/// A triangle's illuminance counts photons of equal flux, c of them over N photons.
+/// The odd/even difference of one triangle, |E_odd − E_even|/2, is an estimate of its
+/// σ with one degree of freedom (z-scores against it follow Student's t with 1 degree
+/// of freedom, Cauchy's tails; it is 0 where as many odd as even photons hit); eq. 5
+/// averages it over the scene. Per triangle we use the count itself: Var(c) = c for
+/// histories hitting it at most once, times the scene's overdispersion
+/// D = Σ(o − e)²/Σc (o, e: odd and even hits; E[(o − e)²] = Var(c)), which corrects
+/// for photons hitting one triangle twice (1 in a scene of small triangles, up to 2–3 on
+/// the few large faces of a bright room). As for receiver cells
+/// ([`pooled_variance`]), a triangle that drew few hits would report a small value and
+/// a small σ; the count it should have drawn is estimated by its neighbours (triangles
+/// sharing a vertex): λ = median of their hits per m² × its area, and
+/// Var = D·max(λ, c − min(√c, λ)).
+pub fn triangle_rel_errors(
+    t: &Tallies,
+    triangles: &[[u32; 3]],
+    adjacent: &crate::scene::adjacency::VertexFaces,
+    areas_m2: &[f64],
+) -> Vec<f64> {
+    let counts: Vec<(u64, u64)> = (0..areas_m2.len())
+        .map(|k| parity_counts(&t.triangle_slots(k), MapKind::Total))
+        .collect();
+    let (mut d2, mut total) = (0.0f64, 0.0f64);
+    for &(o, e) in &counts {
+        d2 += (o as f64 - e as f64).powi(2);
+        total += (o + e) as f64;
+    }
+    let dispersion = if total > 0.0 { d2 / total } else { 1.0 };
+    let density: Vec<f64> = counts
+        .iter()
+        .zip(areas_m2)
+        .map(|(&(o, e), &a)| if a > 0.0 { (o + e) as f64 / a } else { 0.0 })
+        .collect();
+    let mut nb: Vec<(u32, f64)> = Vec::new();
+    let mut rel = Vec::with_capacity(areas_m2.len());
+    for (k, (&(o, e), tri)) in counts.iter().zip(triangles).enumerate() {
+        let c = (o + e) as f64;
+        if c == 0.0 {
+            rel.push(f64::NAN);
+            continue;
+        }
+        nb.clear();
+        for &v in tri {
+            for &j in adjacent.faces(v as usize) {
+                if j as usize != k {
+                    nb.push((j, density[j as usize]));
+                }
+            }
+        }
+        nb.sort_unstable_by_key(|&(j, _)| j);
+        nb.dedup_by_key(|&mut (j, _)| j);
+        let lambda = if nb.is_empty() {
+            0.0
+        } else {
+            nb.sort_unstable_by(|a, b| a.1.total_cmp(&b.1));
+            let n = nb.len();
+            let median = if n % 2 == 1 {
+                nb[n / 2].1
+            } else {
+                0.5 * (nb[n / 2 - 1].1 + nb[n / 2].1)
+            };
+            median * areas_m2[k]
+        };
+        let var = dispersion * pooled_variance(c, c.sqrt(), lambda);
+        rel.push(var.sqrt() / c);
+    }
+    rel
+}
+
 /// Mean illuminance and odd/even error of a scene map (eqs. 4–5, σ = d/2).
 pub fn map_stats(t: &Tallies, kind: MapKind, areas_m2: &[f64], total_flux_lm: f64) -> MapStats {
     let total_area: f64 = areas_m2.iter().sum();
