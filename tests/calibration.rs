@@ -704,3 +704,57 @@ fn study_sphere_map_odd_even() {
     eprintln!("odd/even per triangle: {zero} triangles with σ = 0 but hits");
     assert_calibrated_tails(&finite, "scene map triangles, odd/even σ");
 }
+
+/// CPU time of the per-cell statistics of a 1000 × 1000-cell receiver (printed, not
+/// asserted): one epoch's cost for a receiver target.
+#[test]
+#[ignore]
+fn study_statistics_cost() {
+    use luxtally::stats::receiver_stats;
+    use luxtally::tally::{CellSums, Counts};
+    let n = 1000usize;
+    let cells: Vec<CellSums> = (0..n * n)
+        .map(|k| {
+            let mut c = CellSums::default();
+            let x = (k % 17) as f64 + 1.0;
+            for (p, m) in c.moments.iter_mut().enumerate() {
+                m.add(x.powi(p as i32 + 1));
+            }
+            c.hits = 1;
+            c
+        })
+        .collect();
+    let counts = Counts {
+        photons: 1_000_000,
+        direct_replicates: 16,
+        dark: false,
+    };
+    for _ in 0..3 {
+        let start = std::time::Instant::now();
+        let own: f64 = cells
+            .iter()
+            .map(|c| luxtally::stats::cell_value(c, counts).1.powi(2))
+            .sum();
+        eprintln!(
+            "cell_value (own σ) over {} cells: {:.1} ms ({own})",
+            n * n,
+            1e3 * start.elapsed().as_secs_f64()
+        );
+        let start = std::time::Instant::now();
+        let (_, sig) = luxtally::stats::cell_values(&cells, [n as u32, n as u32], counts);
+        eprintln!(
+            "cell_values over {} cells: {:.1} ms ({})",
+            n * n,
+            1e3 * start.elapsed().as_secs_f64(),
+            sig[7]
+        );
+        let start = std::time::Instant::now();
+        let s = receiver_stats(&cells, [n as u32, n as u32], counts, None);
+        eprintln!(
+            "receiver_stats over {} cells: {:.1} ms (rms σ {})",
+            n * n,
+            1e3 * start.elapsed().as_secs_f64(),
+            s.rms_sigma
+        );
+    }
+}

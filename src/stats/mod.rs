@@ -104,8 +104,35 @@ pub fn pooled_variance(own: f64, own_sd: f64, pooled: f64) -> f64 {
 }
 
 /// Median of the photon variances of cell (i, j)'s up to 8 neighbours in a grid of
-/// `nu × nv` cells (0 without neighbours).
+/// `nu × nv` cells (0 without neighbours). Inside the grid, a 19-comparator sorting
+/// network (no branches: this runs over every cell at every epoch).
 fn neighbour_median(var: &[f64], nu: usize, nv: usize, i: usize, j: usize) -> f64 {
+    if i > 0 && j > 0 && i + 1 < nu && j + 1 < nv {
+        let (up, down) = ((j - 1) * nu + i, (j + 1) * nu + i);
+        let row = j * nu + i;
+        let [mut x0, mut x1, mut x2, mut x3, mut x4, mut x5, mut x6, mut x7] = [
+            var[up - 1],
+            var[up],
+            var[up + 1],
+            var[row - 1],
+            var[row + 1],
+            var[down - 1],
+            var[down],
+            var[down + 1],
+        ];
+        // Compare-exchange on locals (kept in registers); variances are never NaN.
+        macro_rules! cx {
+            ($($a:ident $b:ident),*) => {$(
+                let (lo, hi) = if $a < $b { ($a, $b) } else { ($b, $a) };
+                $a = lo;
+                $b = hi;
+            )*};
+        }
+        cx!(x0 x1, x2 x3, x4 x5, x6 x7, x0 x2, x1 x3, x4 x6, x5 x7, x1 x2, x5 x6);
+        cx!(x0 x4, x3 x7, x1 x5, x2 x6, x1 x4, x3 x6, x2 x4, x3 x5, x3 x4);
+        let _ = (x0, x1, x2, x5, x6, x7);
+        return 0.5 * (x3 + x4);
+    }
     let mut nb = [0.0f64; 8];
     let mut n = 0;
     for jj in j.saturating_sub(1)..(j + 2).min(nv) {
@@ -626,6 +653,72 @@ mod tests {
         let (m, s) = cell_estimate(n_hits as f64, n_hits as f64, n_hist);
         let rel = relative_error(m, s);
         assert!((rel - 1.0 / (n_hits as f64).sqrt()).abs() < 1e-3 * rel);
+    }
+
+    #[test]
+    fn pooled_variance_follows_the_neighbours_below_and_the_cell_above() {
+        // A cell that drew few scores takes its neighbours' variance ...
+        assert_eq!(pooled_variance(3.0, 3f64.sqrt(), 11.0), 11.0);
+        // ... one that drew more keeps its own, less one standard deviation of it ...
+        assert_eq!(pooled_variance(25.0, 5.0, 11.0), 20.0);
+        // ... lowered by at most the pooled variance, and all of it where the
+        // neighbours saw nothing.
+        assert_eq!(pooled_variance(4.0, 2.0, 1.0), 3.0);
+        assert_eq!(pooled_variance(1.0, 1.0, 0.0), 1.0);
+    }
+
+    #[test]
+    fn neighbour_median_reads_the_eight_neighbours_and_fewer_at_borders() {
+        // 3 × 3 grid holding 0..9: the centre's neighbours are 0..9 without 4.
+        let var: Vec<f64> = (0..9).map(f64::from).collect();
+        assert_eq!(neighbour_median(&var, 3, 3, 1, 1), 4.0); // median of 0,1,2,3,5,6,7,8
+        assert_eq!(neighbour_median(&var, 3, 3, 0, 0), 3.0); // 1, 3, 4
+        assert_eq!(neighbour_median(&var, 3, 3, 2, 1), 4.0); // 1, 2, 4, 7, 8
+        assert_eq!(neighbour_median(&[5.0], 1, 1, 0, 0), 0.0);
+        // The sorting network against a sort, on shuffled values.
+        let mut rng = crate::rng::aux_stream(3);
+        for _ in 0..1000 {
+            let var: Vec<f64> = (0..9)
+                .map(|_| (crate::sampling::uniform(&mut rng) * 4.0).floor())
+                .collect();
+            let mut nb: Vec<f64> = (0..9).filter(|&k| k != 4).map(|k| var[k]).collect();
+            nb.sort_by(f64::total_cmp);
+            assert_eq!(neighbour_median(&var, 3, 3, 1, 1), 0.5 * (nb[3] + nb[4]));
+        }
+    }
+
+    #[test]
+    fn a_cell_that_drew_few_scores_reports_the_sigma_of_the_count_it_should_have() {
+        // 3 × 3 cells of 10⁶ histories each scoring 1 or 0: the neighbours drew 11
+        // scores, the centre 3. Its σ is that of 11 scores, not of 3.
+        let n = 1_000_000u64;
+        let cell = |k: u32| {
+            let mut c = CellSums::default();
+            for m in &mut c.moments {
+                m.add(k as f64);
+            }
+            c.hits = k as u64;
+            c
+        };
+        let mut cells = vec![cell(11); 9];
+        cells[4] = cell(3);
+        let counts = Counts {
+            photons: n,
+            direct_replicates: 0,
+            dark: false,
+        };
+        let (values, sigmas) = cell_values(&cells, [3, 3], counts);
+        let own = cell_estimate(3.0, 3.0, n).1;
+        let expected = cell_estimate(11.0, 11.0, n).1;
+        assert_eq!(values[4], 3.0 / n as f64);
+        assert!(
+            (sigmas[4] - expected).abs() < 1e-15,
+            "{} vs {expected} (own {own})",
+            sigmas[4]
+        );
+        // A cell nothing reached keeps an unknown error.
+        cells[4] = CellSums::default();
+        assert!(cell_values(&cells, [3, 3], counts).1[4].is_nan());
     }
 
     #[test]
