@@ -91,7 +91,9 @@ fn direct_part(c: &CellSums, replicates: u64) -> (f64, f64) {
 /// beyond its own noise `own_sd` (a real edge, a peak, or a large score it really drew),
 /// lowered by at most `pooled`:
 ///
-///     var = max(pooled, own − min(own_sd, pooled))
+/// ```text
+/// var = max(pooled, own − min(own_sd, pooled))
+/// ```
 ///
 /// Where the neighbours saw nothing (pooled = 0) this is `own`; where counts are high
 /// both agree and it is the pooled estimate (unbiased for a field that varies linearly
