@@ -758,3 +758,40 @@ fn study_statistics_cost() {
         );
     }
 }
+
+/// CPU time of the scene map's per-triangle errors on a 327,680-triangle icosphere
+/// (printed, not asserted).
+#[test]
+#[ignore]
+fn study_triangle_errors_cost() {
+    use luxtally::scene::adjacency::VertexFaces;
+    let s = scene(
+        r#"
+        [materials.grey]
+        reflectance = 0.5
+        [[objects]]
+        shape = "sphere"
+        center = [0, 0, 0]
+        radius = 1.0
+        subdivisions = 7
+        material = "grey"
+        [[lights]]
+        type = "point"
+        position = [0, 0.1, 0.5]
+        intensity_cd = 100
+    "#,
+    );
+    let opts = options(&s, 1_000_000, 2, Backend::Embree);
+    let result = run(&s, &opts, &AtomicBool::new(false), &mut ()).expect("run succeeds");
+    let g = &s.geometry;
+    let start = std::time::Instant::now();
+    let adjacent = VertexFaces::new(&g.triangles, g.vertices.len());
+    let rel =
+        luxtally::stats::triangle_rel_errors(&result.tallies, &g.triangles, &adjacent, &g.area_m2);
+    eprintln!(
+        "triangle_rel_errors over {} triangles: {:.1} ms ({})",
+        rel.len(),
+        1e3 * start.elapsed().as_secs_f64(),
+        rel[0]
+    );
+}

@@ -451,7 +451,8 @@ pub fn triangle_face_illuminance_lx(
 /// the few large faces of a bright room). As for receiver cells
 /// ([`pooled_variance`]), a triangle that drew few hits would report a small value and
 /// a small σ; the count it should have drawn is estimated by its neighbours (triangles
-/// sharing a vertex): λ = median of their hits per m² × its area, and
+/// sharing a vertex, those sharing an edge counted twice): λ = median of their hits per
+/// m² × its area, and
 /// Var = D·max(λ, c − min(√c, λ)).
 pub fn triangle_rel_errors(
     t: &Tallies,
@@ -473,7 +474,7 @@ pub fn triangle_rel_errors(
         .zip(areas_m2)
         .map(|(&(o, e), &a)| if a > 0.0 { (o + e) as f64 / a } else { 0.0 })
         .collect();
-    let mut nb: Vec<(u32, f64)> = Vec::new();
+    let mut nb: Vec<f64> = Vec::new();
     let mut rel = Vec::with_capacity(areas_m2.len());
     for (k, (&(o, e), tri)) in counts.iter().zip(triangles).enumerate() {
         let c = (o + e) as f64;
@@ -481,27 +482,27 @@ pub fn triangle_rel_errors(
             rel.push(f64::NAN);
             continue;
         }
+        // The faces of its three vertices: a neighbour across an edge appears twice
+        // (it shares two vertices), which weighs it double in the median, as it should.
         nb.clear();
         for &v in tri {
             for &j in adjacent.faces(v as usize) {
                 if j as usize != k {
-                    nb.push((j, density[j as usize]));
+                    nb.push(density[j as usize]);
                 }
             }
         }
-        nb.sort_unstable_by_key(|&(j, _)| j);
-        nb.dedup_by_key(|&mut (j, _)| j);
-        let lambda = if nb.is_empty() {
-            0.0
-        } else {
-            nb.sort_unstable_by(|a, b| a.1.total_cmp(&b.1));
-            let n = nb.len();
-            let median = if n % 2 == 1 {
-                nb[n / 2].1
-            } else {
-                0.5 * (nb[n / 2 - 1].1 + nb[n / 2].1)
-            };
-            median * areas_m2[k]
+        let lambda = match nb.len() {
+            0 => 0.0,
+            n => {
+                let (below, &mut upper, _) = nb.select_nth_unstable_by(n / 2, f64::total_cmp);
+                let median = if n % 2 == 1 {
+                    upper
+                } else {
+                    0.5 * (below.iter().copied().fold(f64::MIN, f64::max) + upper)
+                };
+                median * areas_m2[k]
+            }
         };
         let var = dispersion * pooled_variance(c, c.sqrt(), lambda);
         rel.push(var.sqrt() / c);
