@@ -126,6 +126,7 @@ fn variant(c: &Cells, which: &str) -> Vec<f64> {
         .collect()
 }
 
+#[allow(clippy::needless_range_loop)]
 fn report(name: &str, runs: &[Cells]) {
     for which in [
         "reported",
@@ -147,7 +148,7 @@ fn report(name: &str, runs: &[Cells]) {
                 variant(c, which)
             };
             for k in 0..c.value.len() {
-                if sig[k].is_nan() || !(sig[k] > 1e-9 * c.exact[k]) {
+                if sig[k].is_nan() || sig[k] <= 1e-9 * c.exact[k] {
                     continue;
                 }
                 let z = (c.value[k] - c.exact[k]) / sig[k];
@@ -314,18 +315,10 @@ fn solid_angle(a: glam::DVec3, b: glam::DVec3, c: glam::DVec3) -> f64 {
     2.0 * num.atan2(den)
 }
 
-/// Mean illuminance over the part of the square [x0, x1] × [y0, y1] (plane z = 0) where
+/// Mean illuminance over the part of the square `cell` = [x0, x1] × [y0, y1] (plane z = 0) where
 /// n·(x, y) ≥ c, from a point source of `intensity_cd` at (0, 0, h): I·Ω/A.
-fn clipped_cell_lx(
-    intensity_cd: f64,
-    h: f64,
-    x0: f64,
-    x1: f64,
-    y0: f64,
-    y1: f64,
-    n: (f64, f64),
-    c: f64,
-) -> f64 {
+fn clipped_cell_lx(intensity_cd: f64, h: f64, cell: [f64; 4], n: (f64, f64), c: f64) -> f64 {
+    let [x0, x1, y0, y1] = cell;
     let square = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)];
     let inside = |p: (f64, f64)| n.0 * p.0 + n.1 * p.1 - c;
     let mut poly = Vec::new();
@@ -404,10 +397,7 @@ fn shadow_exact(i: usize, j: usize) -> f64 {
     clipped_cell_lx(
         1000.0,
         1.9999,
-        x0,
-        x0 + w,
-        y0,
-        y0 + w,
+        [x0, x0 + w, y0, y0 + w],
         (a.cos(), a.sin()),
         SHADOW_C,
     )
