@@ -6,14 +6,15 @@
 //! `red green blue` (uchar: viridis over 0 … the 99th percentile of the vertex
 //! illuminance, brighter vertices clipped to the top colour; the scale is repeated in a
 //! `comment` line). Faces: `vertex_indices` (list uchar int), `illuminance` (total, lx),
-//! `indirect` (lx) and `rel_error` (odd/even estimate |E_odd − E_even| / 2 / E, method.md
-//! §3; 1 when unknown), all float (f64 rounded to f32).
+//! `indirect` (lx) and `rel_error` (σ/E from the triangle's hits, its neighbours' and the
+//! scene's odd/even overdispersion, `stats::triangle_rel_errors`; 1 when unknown), all
+//! float (f64 rounded to f32).
 
 use crate::raster::palette::{normalise, viridis};
 use crate::raster::{quantile, Rank};
 use crate::run::RunState;
-use crate::scene::adjacency::vertex_means;
-use crate::stats::{triangle_illuminance_lx, MapKind, REL_ERROR_UNKNOWN};
+use crate::scene::adjacency::{vertex_means, VertexFaces};
+use crate::stats::{triangle_illuminance_lx, triangle_rel_errors, MapKind, REL_ERROR_UNKNOWN};
 use std::io::Write;
 
 /// Per-face values of the map, f64.
@@ -23,11 +24,11 @@ pub struct FaceMap {
     pub rel_error: Vec<f64>,
 }
 
-/// Total and indirect illuminance and odd/even error of every triangle.
-pub fn face_map(state: &RunState<'_>) -> FaceMap {
+/// Total and indirect illuminance and relative error of every triangle.
+pub fn face_map(state: &RunState<'_>, adjacent: &VertexFaces) -> FaceMap {
     let t = state.tallies;
     let g = &state.scene.geometry;
-    let (n_odd, n_even) = t.odd_even_photons();
+    let rel_errors = triangle_rel_errors(t, &g.triangles, adjacent, &g.area_m2);
     let mut m = FaceMap {
         illuminance_lx: Vec::with_capacity(g.triangle_count()),
         indirect_lx: Vec::with_capacity(g.triangle_count()),
@@ -38,10 +39,10 @@ pub fn face_map(state: &RunState<'_>) -> FaceMap {
             triangle_illuminance_lx(t, kind, k, a, state.setup.total_flux_lm, parity)
         };
         let total = e(MapKind::Total, None);
-        let rel = if n_odd > 0 && n_even > 0 && total > 0.0 {
-            (e(MapKind::Total, Some(true)) - e(MapKind::Total, Some(false))).abs() / 2.0 / total
-        } else {
+        let rel = if rel_errors[k].is_nan() {
             REL_ERROR_UNKNOWN
+        } else {
+            rel_errors[k]
         };
         m.illuminance_lx.push(total);
         m.indirect_lx.push(e(MapKind::Indirect, None));
@@ -62,7 +63,8 @@ pub fn scene_map_ply(state: &RunState<'_>) -> Vec<u8> {
 /// only the per-face and per-vertex values are held, never the file's bytes.
 pub fn write_scene_map_ply(state: &RunState<'_>, out: &mut impl Write) -> std::io::Result<()> {
     let g = &state.scene.geometry;
-    let faces = face_map(state);
+    let adjacent = VertexFaces::new(&g.triangles, g.vertices.len());
+    let faces = face_map(state, &adjacent);
     let vertex_lx = vertex_means(&g.triangles, g.vertices.len(), &g.area_m2, |j| {
         faces.illuminance_lx[j]
     });

@@ -242,7 +242,7 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
     let t = state.tallies;
     let r = &state.scene.receivers[index];
     let cells = t.receiver_cells(&state.scene.receivers, index);
-    let stats = receiver_stats(cells, t.counts());
+    let stats = receiver_stats(cells, r.cells, t.counts(), None);
     let direct: Vec<(f64, f64)> = cells
         .iter()
         .map(|c| {

@@ -133,10 +133,12 @@ pub fn receiver_target_error(
     counts: Counts,
     absolute: bool,
 ) -> f64 {
+    let Some(index) = target.receiver() else {
+        return f64::INFINITY;
+    };
     let cell_ids = target.cells(receivers);
-    let picked: Vec<CellSums> = cell_ids.iter().map(|&c| cells[c]).collect();
-    let stats = receiver_stats(&picked, counts);
-    if picked.is_empty() || stats.unknown_cells > 0 {
+    let stats = receiver_stats(cells, receivers[index].cells, counts, Some(&cell_ids));
+    if cell_ids.is_empty() || stats.unknown_cells > 0 {
         return f64::INFINITY;
     }
     match (target, absolute) {
