@@ -456,7 +456,7 @@ pub fn fingerprint(scene: &Scene) -> u64 {
             h.eat(&i.to_le_bytes());
         }
     }
-    for m in g.material.iter().chain(&g.object) {
+    for m in g.material.iter().chain(g.object.iter()) {
         h.eat(&m.to_le_bytes());
     }
     // Debug prints every f64 so that it reads back to the same bits.

@@ -273,7 +273,7 @@ fn scene_map_ply_reads_back_to_the_triangle_map() {
         let mut weight = vec![0.0; g.vertices.len()];
         let mut sum = vec![0.0; g.vertices.len()];
         for (k, face) in faces.iter().enumerate() {
-            let a = g.area_m2[k];
+            let a = g.area_m2(k);
             let tri = g.triangles[k];
             assert_eq!(
                 face[..4],

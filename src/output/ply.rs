@@ -33,7 +33,7 @@ pub fn face_map(state: &RunState<'_>) -> FaceMap {
         indirect_lx: Vec::with_capacity(g.triangle_count()),
         rel_error: Vec::with_capacity(g.triangle_count()),
     };
-    for (k, &a) in g.area_m2.iter().enumerate() {
+    for (k, a) in g.areas_m2().enumerate() {
         let e = |kind, parity| {
             triangle_illuminance_lx(t, kind, k, a, state.setup.total_flux_lm, parity)
         };
@@ -67,7 +67,7 @@ pub fn write_scene_map_ply(state: &RunState<'_>, out: &mut impl Write) -> std::i
     let vertex_lx: Vec<f64> = (0..g.vertices.len())
         .map(|v| {
             adjacent
-                .area_weighted_mean(v, &g.area_m2, |_| true, |j| [faces.illuminance_lx[j]])
+                .area_weighted_mean(v, |j| g.area_m2(j), |_| true, |j| [faces.illuminance_lx[j]])
                 .map_or(0.0, |[e]| e)
         })
         .collect();

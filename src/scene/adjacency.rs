@@ -40,7 +40,7 @@ impl VertexFaces {
     pub fn area_weighted_mean<const N: usize>(
         &self,
         v: usize,
-        area_m2: &[f64],
+        area_m2: impl Fn(usize) -> f64,
         keep: impl Fn(usize) -> bool,
         value: impl Fn(usize) -> [f64; N],
     ) -> Option<[f64; N]> {
@@ -50,7 +50,7 @@ impl VertexFaces {
             if !keep(j) {
                 continue;
             }
-            let (a, x) = (area_m2[j], value(j));
+            let (a, x) = (area_m2(j), value(j));
             for c in 0..N {
                 sum[c] += a * x[c];
             }
@@ -68,10 +68,10 @@ mod tests {
     fn vertex_mean_weighs_faces_by_area() {
         let vf = VertexFaces::new(&[[0, 1, 2], [0, 2, 3]], 5);
         assert_eq!(vf.faces(0), &[0, 1]);
-        let mean = vf.area_weighted_mean(0, &[1.0, 3.0], |_| true, |j| [[10.0, 20.0][j]]);
+        let mean = vf.area_weighted_mean(0, |j| [1.0, 3.0][j], |_| true, |j| [[10.0, 20.0][j]]);
         assert_eq!(mean, Some([17.5]));
         assert_eq!(
-            vf.area_weighted_mean(4, &[1.0, 3.0], |_| true, |_| [1.0]),
+            vf.area_weighted_mean(4, |j| [1.0, 3.0][j], |_| true, |_| [1.0]),
             None
         );
     }

@@ -4,6 +4,7 @@
 pub mod forecast;
 pub mod stop;
 
+use crate::scene::Geometry;
 use crate::tally::{CellSums, Counts, Slot, Tallies};
 
 /// Relative error reported for a value of 0 whose σ is known: 100 %, so no relative
@@ -291,9 +292,11 @@ pub fn triangle_face_illuminance_lx(
     total_flux_lm * count as f64 / (t.photons as f64 * area_m2)
 }
 
-/// Mean illuminance and odd/even error of a scene map (eqs. 4–5, σ = d/2).
-pub fn map_stats(t: &Tallies, kind: MapKind, areas_m2: &[f64], total_flux_lm: f64) -> MapStats {
-    let total_area: f64 = areas_m2.iter().sum();
+/// Mean illuminance and odd/even error of a scene map (eqs. 4–5, σ = d/2) over the
+/// triangles of `g`. Runs after every epoch: triangles no photon reached add nothing
+/// (exactly 0 to each sum) and are skipped before their area is computed.
+pub fn map_stats(t: &Tallies, kind: MapKind, g: &Geometry, total_flux_lm: f64) -> MapStats {
+    let total_area = g.total_area_m2();
     let (n_odd, n_even) = t.odd_even_photons();
     if total_area <= 0.0 || t.photons == 0 {
         return MapStats {
@@ -317,8 +320,12 @@ pub fn map_stats(t: &Tallies, kind: MapKind, areas_m2: &[f64], total_flux_lm: f6
         0.0
     };
     let (mut sum_e, mut sum_e2, mut sum_d2) = (0.0, 0.0, 0.0);
-    for (k, &a) in areas_m2.iter().enumerate() {
+    for k in 0..g.triangle_count() {
         let (odd, even) = parity_counts(&t.triangle_slots(k), kind);
+        if odd == 0 && even == 0 {
+            continue;
+        }
+        let a = g.area_m2(k);
         let e = per_photon * (odd + even) as f64 / a;
         sum_e += a * e;
         sum_e2 += a * e * e;
