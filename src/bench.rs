@@ -22,8 +22,7 @@ pub const CHUNK: usize = 4096;
 /// different sizes floating at different heights.
 pub fn procedural_geometry(min_triangles: usize) -> Geometry {
     let (verts, tris) = procedural_mesh(min_triangles);
-    let zeros = vec![0u32; tris.len()];
-    Geometry::from_world(&verts, &tris, &zeros, &zeros)
+    Geometry::uniform(&verts, tris, 0, 0)
 }
 
 /// The world-space vertices and triangles of [`procedural_geometry`], generated in
@@ -858,6 +857,9 @@ pub struct ScaleResult {
     /// CPU seconds (all threads, user + system) of the set-up: what it would take on
     /// idle cores, whatever else the machine runs.
     pub setup_cpu_s: f64,
+    /// Of `setup_cpu_s`: the scene load or generation (with `Geometry`).
+    #[serde(default)]
+    pub load_cpu_s: f64,
     /// `VmHWM` at the end, MiB.
     pub peak_rss_mib: f64,
     /// Peak RSS less the RSS before the scene was made, per triangle stored: geometry,
@@ -927,6 +929,7 @@ pub fn bench_scale_case(
         ScaleCase::Flattened(n) => lit_scene("flattened", procedural_geometry(n as usize)),
     };
     let load_s = start.elapsed().as_secs_f64();
+    let load_cpu_s = process_cpu_seconds() - cpu_before_s;
     let backend = crate::accel::Backend::Embree;
     let caster = crate::accel::build(backend, &scene.geometry)?;
     let setup_s = start.elapsed().as_secs_f64();
@@ -960,6 +963,7 @@ pub fn bench_scale_case(
         load_s,
         bvh_s: setup_s - load_s,
         setup_cpu_s,
+        load_cpu_s,
         peak_rss_mib,
         bytes_per_triangle: (peak_rss_mib - rss_before_mib) * 1048576.0
             / triangles_stored.max(1) as f64,

@@ -511,6 +511,35 @@ impl Geometry {
         g
     }
 
+    /// As [`Geometry::from_world`] with one material and one object for every triangle,
+    /// `triangles` taken rather than copied (the procedural benchmark scenes: 10⁷
+    /// triangles set up without a second 120 MB array).
+    pub fn uniform(
+        vertices: &[DVec3],
+        triangles: Vec<[u32; 3]>,
+        material: u32,
+        object: u32,
+    ) -> Geometry {
+        use rayon::prelude::*;
+        let origin = Bounds::of(vertices).centre();
+        let mut g = Geometry {
+            origin,
+            vertices: Shared::padded(local_vertices(vertices, origin)),
+            ..Geometry::default()
+        };
+        let keep = |t: &[u32; 3]| g.cross_f64(*t).length() > 0.0;
+        let triangles = if triangles.par_iter().all(keep) {
+            triangles
+        } else {
+            // Triangles of zero (or NaN) area can never be hit and have no illuminance.
+            triangles.into_par_iter().filter(keep).collect()
+        };
+        g.material = TriangleIds::constant(material, triangles.len());
+        g.object = TriangleIds::constant(object, triangles.len());
+        g.triangles = triangles.into();
+        g
+    }
+
     /// Stores the triangles of nonzero area (as traced: from the f32 local vertices)
     /// with their material and object.
     fn set_mapped_triangles(&mut self, triangles: &[[u32; 3]], material: &[u32], object: &[u32]) {
