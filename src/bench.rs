@@ -22,72 +22,95 @@ pub const CHUNK: usize = 4096;
 /// different sizes floating at different heights.
 pub fn procedural_geometry(min_triangles: usize) -> Geometry {
     let (verts, tris) = procedural_mesh(min_triangles);
-    let zeros = vec![0u32; tris.len()];
-    Geometry::from_world(&verts, &tris, &zeros, &zeros)
+    Geometry::uniform(&verts, tris, 0, 0)
 }
 
-/// The world-space vertices and triangles of [`procedural_geometry`].
+/// The world-space vertices and triangles of [`procedural_geometry`], generated in
+/// parallel (every vertex and triangle alone, so the values do not depend on the
+/// threads; the spheres' random centres and radii are drawn first, in order).
 pub fn procedural_mesh(min_triangles: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-    let mut verts: Vec<DVec3> = Vec::new();
-    let mut tris: Vec<[u32; 3]> = Vec::new();
-
     // Heightfield: about 40 % of the budget, 2·n² triangles.
     let n = (((min_triangles as f64 * 0.4) / 2.0).sqrt().ceil() as usize).max(2);
     let size = 100.0;
-    for j in 0..=n {
-        for i in 0..=n {
-            let x = -size / 2.0 + size * i as f64 / n as f64;
-            let y = -size / 2.0 + size * j as f64 / n as f64;
-            let z = 1.5 * (0.31 * x).sin() * (0.23 * y).cos() + 0.4 * (1.7 * x + 0.9 * y).sin();
-            verts.push(DVec3::new(x, y, z));
-        }
-    }
-    let at = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    for j in 0..n {
-        for i in 0..n {
-            tris.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
-            tris.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
-        }
-    }
+    let field_vertices = (n + 1) * (n + 1);
+    let field_triangles = 2 * n * n;
 
     // Spheres (UV, 48 × 24: 2 208 triangles each) until the budget is reached.
-    let mut rng = crate::rng::aux_stream(0x5eed);
     let (seg, rings) = (48usize, 24usize);
-    while tris.len() < min_triangles {
-        let c = DVec3::new(
-            rng.random_range(-45.0..45.0),
-            rng.random_range(-45.0..45.0),
-            rng.random_range(0.0..12.0),
-        );
-        let r: f64 = rng.random_range(0.3..4.0);
-        let base = verts.len() as u32;
-        for k in 0..=rings {
-            let theta = std::f64::consts::PI * k as f64 / rings as f64;
-            for s in 0..seg {
-                let phi = std::f64::consts::TAU * s as f64 / seg as f64;
-                let d = DVec3::new(
-                    theta.sin() * phi.cos(),
-                    theta.sin() * phi.sin(),
-                    theta.cos(),
-                );
-                // A little displacement so no two spheres are alike.
-                verts.push(c + d * r * (1.0 + 0.05 * (5.0 * phi).sin() * (3.0 * theta).sin()));
+    let sphere_vertices = (rings + 1) * seg;
+    let at = |k: usize, s: usize| (k * seg + s % seg) as u32;
+    let mut pattern: Vec<[u32; 3]> = Vec::new();
+    for k in 0..rings {
+        for s in 0..seg {
+            // Quads between two rings; fans at the poles.
+            // Skip the halves that collapse onto a pole.
+            if k + 1 != rings {
+                pattern.push([at(k, s), at(k + 1, s), at(k + 1, s + 1)]);
             }
-        }
-        let at = |k: usize, s: usize| base + (k * seg + s % seg) as u32;
-        for k in 0..rings {
-            for s in 0..seg {
-                // Quads between two rings; fans at the poles.
-                // Skip the halves that collapse onto a pole.
-                if k + 1 != rings {
-                    tris.push([at(k, s), at(k + 1, s), at(k + 1, s + 1)]);
-                }
-                if k != 0 {
-                    tris.push([at(k, s), at(k + 1, s + 1), at(k, s + 1)]);
-                }
+            if k != 0 {
+                pattern.push([at(k, s), at(k + 1, s + 1), at(k, s + 1)]);
             }
         }
     }
+    let spheres = min_triangles
+        .saturating_sub(field_triangles)
+        .div_ceil(pattern.len());
+    let mut rng = crate::rng::aux_stream(0x5eed);
+    let placed: Vec<(DVec3, f64)> = (0..spheres)
+        .map(|_| {
+            let c = DVec3::new(
+                rng.random_range(-45.0..45.0),
+                rng.random_range(-45.0..45.0),
+                rng.random_range(0.0..12.0),
+            );
+            (c, rng.random_range(0.3..4.0))
+        })
+        .collect();
+
+    let mut verts: Vec<DVec3> = Vec::new();
+    (0..field_vertices + spheres * sphere_vertices)
+        .into_par_iter()
+        .map(|index| {
+            if index < field_vertices {
+                let (i, j) = (index % (n + 1), index / (n + 1));
+                let x = -size / 2.0 + size * i as f64 / n as f64;
+                let y = -size / 2.0 + size * j as f64 / n as f64;
+                let z = 1.5 * (0.31 * x).sin() * (0.23 * y).cos() + 0.4 * (1.7 * x + 0.9 * y).sin();
+                return DVec3::new(x, y, z);
+            }
+            let index = index - field_vertices;
+            let (c, r) = placed[index / sphere_vertices];
+            let (k, s) = ((index % sphere_vertices) / seg, index % seg);
+            let theta = std::f64::consts::PI * k as f64 / rings as f64;
+            let phi = std::f64::consts::TAU * s as f64 / seg as f64;
+            let d = DVec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            );
+            // A little displacement so no two spheres are alike.
+            c + d * r * (1.0 + 0.05 * (5.0 * phi).sin() * (3.0 * theta).sin())
+        })
+        .collect_into_vec(&mut verts);
+
+    let mut tris: Vec<[u32; 3]> = Vec::new();
+    let field_at = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    (0..field_triangles + spheres * pattern.len())
+        .into_par_iter()
+        .map(|index| {
+            if index < field_triangles {
+                let (i, j) = ((index / 2) % n, (index / 2) / n);
+                return if index % 2 == 0 {
+                    [field_at(i, j), field_at(i + 1, j), field_at(i + 1, j + 1)]
+                } else {
+                    [field_at(i, j), field_at(i + 1, j + 1), field_at(i, j + 1)]
+                };
+            }
+            let index = index - field_triangles;
+            let base = (field_vertices + index / pattern.len() * sphere_vertices) as u32;
+            pattern[index % pattern.len()].map(|v| base + v)
+        })
+        .collect_into_vec(&mut tris);
     (verts, tris)
 }
 
@@ -515,7 +538,7 @@ fn obvhs_row(
 pub fn lit_scene(name: &str, mut geometry: Geometry) -> crate::scene::Scene {
     use crate::light::Point;
     use crate::scene::{Light, Material, Scene};
-    geometry.material.iter_mut().for_each(|m| *m = 0);
+    geometry.material = crate::scene::TriangleIds::constant(0, geometry.triangle_count());
     let (lo, hi) = geometry.world_bounds().unwrap_or((DVec3::ZERO, DVec3::ONE));
     let position = DVec3::new(
         (lo.x + hi.x) / 2.0,
@@ -837,6 +860,9 @@ pub struct ScaleResult {
     /// CPU seconds (all threads, user + system) of the set-up: what it would take on
     /// idle cores, whatever else the machine runs.
     pub setup_cpu_s: f64,
+    /// Of `setup_cpu_s`: the scene load or generation (with `Geometry`).
+    #[serde(default)]
+    pub load_cpu_s: f64,
     /// `VmHWM` at the end, MiB.
     pub peak_rss_mib: f64,
     /// Peak RSS less the RSS before the scene was made, per triangle stored: geometry,
@@ -908,6 +934,7 @@ pub fn bench_scale_case(
         ScaleCase::Flattened(n) => lit_scene("flattened", procedural_geometry(n as usize)),
     };
     let load_s = start.elapsed().as_secs_f64();
+    let load_cpu_s = process_cpu_seconds() - cpu_before_s;
     let backend = crate::accel::Backend::Embree;
     // As a run decides (`limits::check_run`), against the memory available.
     let budget = crate::limits::Budget::new(None)?;
@@ -954,6 +981,7 @@ pub fn bench_scale_case(
         load_s,
         bvh_s: setup_s - load_s,
         setup_cpu_s,
+        load_cpu_s,
         peak_rss_mib,
         bytes_per_triangle: (peak_rss_mib - rss_before_mib) * 1048576.0
             / triangles_stored.max(1) as f64,

@@ -348,14 +348,18 @@ impl Checkpoint {
     }
 
     pub fn encode(&self) -> Result<Vec<u8>> {
-        let payload = postcard::to_stdvec(self)
+        // The payload is serialised straight after the header (length and checksum
+        // filled in after): one copy of the maps' bytes in memory, not two.
+        let mut header = Vec::with_capacity(HEADER_BYTES);
+        header.extend_from_slice(MAGIC);
+        header.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+        header.resize(HEADER_BYTES, 0);
+        let mut bytes = postcard::to_extend(self, header)
             .map_err(|e| Error::Unsupported(format!("checkpoint: {e}")))?;
-        let mut bytes = Vec::with_capacity(HEADER_BYTES + payload.len());
-        bytes.extend_from_slice(MAGIC);
-        bytes.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-        bytes.extend_from_slice(&(payload.len() as u64).to_le_bytes());
-        bytes.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
-        bytes.extend_from_slice(&payload);
+        let payload_len = (bytes.len() - HEADER_BYTES) as u64;
+        let crc = crc32fast::hash(&bytes[HEADER_BYTES..]);
+        bytes[12..20].copy_from_slice(&payload_len.to_le_bytes());
+        bytes[20..24].copy_from_slice(&crc.to_le_bytes());
         Ok(bytes)
     }
 
@@ -447,7 +451,7 @@ pub fn fingerprint(scene: &Scene) -> u64 {
             h.eat(&i.to_le_bytes());
         }
     }
-    for m in g.material.iter().chain(&g.object) {
+    for m in g.material.iter().chain(g.object.iter()) {
         h.eat(&m.to_le_bytes());
     }
     // Debug prints every f64 so that it reads back to the same bits.

@@ -29,20 +29,20 @@ use std::path::Path;
 /// Embree reads in place), Embree's BVH (build quality medium, with its build's peak)
 /// and the per-triangle outputs (scene_map.ply, the checkpoint's copy of the triangle
 /// maps). Measured: runs of 4 and 8 spheres of subdivision 8 (5.2 M and 10.5 M
-/// triangles, 100,000 photons) peaked at 0.81 and 1.59 GiB RSS: 159 bytes per triangle,
-/// less the triangle maps' 32.
-pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE: f64 = 127.0;
+/// triangles, 100,000 photons) peaked at 699 and 1328 MiB RSS: 126 bytes per triangle,
+/// less the triangle maps' 32 (159 before areas, normals and the u32 material and object
+/// ids stopped being stored per triangle).
+pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE: f64 = 94.0;
 
 /// The same with Embree's compact BVH (`--bvh compact`, or `auto` when the fast one
-/// would not fit): the same runs with the compact BVH peaked at 0.66 and 1.32 GiB, 136
-/// bytes per triangle, less the maps' 32.
-pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE_COMPACT: f64 = 104.0;
+/// would not fit): the same runs with the compact BVH peaked at 136 bytes per triangle,
+/// less the maps' 32, before the per-triangle arrays shrank; 16 spheres (21 M
+/// triangles) then peaked at 2628 MiB and now at 2069 MiB, 28 bytes per triangle less.
+pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE_COMPACT: f64 = 76.0;
 
-/// The same with obvhs (its CWBVH build holds more while it builds): 1.61 and 3.20 GiB
-/// for the same scenes, 324 bytes per triangle, less the triangle maps' 64 (measured
-/// when the maps and the checkpoint's copy of them counted in u64: an overestimate by
-/// about 32 bytes since).
-pub const GEOMETRY_BYTES_PER_TRIANGLE_OBVHS: f64 = 260.0;
+/// The same with obvhs (its CWBVH build holds more while it builds): 1514 and 2994 MiB
+/// for the same scenes as Embree's, 296 bytes per triangle, less the triangle maps' 32.
+pub const GEOMETRY_BYTES_PER_TRIANGLE_OBVHS: f64 = 264.0;
 
 /// Per instance of a `map = false` object (bytes): Embree's instance geometry and its
 /// share of the top-level BVH, our `Instance` (transform, normal matrix, bounds).

@@ -690,12 +690,7 @@ pub(crate) fn target_error(
 ) -> f64 {
     match target.receiver() {
         None => {
-            let m = map_stats(
-                tallies,
-                MapKind::Total,
-                &scene.geometry.area_m2,
-                total_flux_lm,
-            );
+            let m = map_stats(tallies, MapKind::Total, &scene.geometry, total_flux_lm);
             if absolute {
                 m.sigma_lx
             } else {

@@ -107,16 +107,16 @@ fn global_odd_even_error_matches_the_actual_map_error() {
     let mut sum_sq = 0.0;
     for (k, tri) in g.triangles.iter().enumerate() {
         let [a, b, c] = tri.map(|i| g.vertices[i as usize].as_dvec3() + g.origin);
-        let exact = flux * solid_angle(a, b, c) / (4.0 * PI * g.area_m2[k]) + indirect;
+        let exact = flux * solid_angle(a, b, c) / (4.0 * PI * g.area_m2(k)) + indirect;
         let e = triangle_illuminance_lx(
             &result.tallies,
             MapKind::Total,
             k,
-            g.area_m2[k],
+            g.area_m2(k),
             result.setup.total_flux_lm,
             None,
         );
-        sum_sq += g.area_m2[k] * (e - exact).powi(2);
+        sum_sq += g.area_m2(k) * (e - exact).powi(2);
     }
     let actual = (sum_sq / area).sqrt();
     let s = luxtally::output::summary::build(&result.state(&scene, &opts));

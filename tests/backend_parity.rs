@@ -84,7 +84,7 @@ fn embree_apis_agree_with_each_other() {
 
     // Embree's normal is the triangle's (v1 − v0) × (v2 − v0), normalised.
     for i in (0..RAYS).filter(|&i| reference.tri[i] != NO_HIT) {
-        let n = g.normal[reference.tri[i] as usize];
+        let n = g.normal(reference.tri[i] as usize);
         let dot = n.x * reference.ngx[i] + n.y * reference.ngy[i] + n.z * reference.ngz[i];
         assert!(
             dot > 0.999,

@@ -639,8 +639,8 @@ fn sphere_map_z(seeds: u64, old: bool) -> Vec<f64> {
         };
         let result = run(&s, &opts, &AtomicBool::new(false), &mut ()).expect("run succeeds");
         let t = &result.tallies;
-        let rel = triangle_rel_errors(t, &g.triangles, &adjacent, &g.area_m2);
-        let mut hits: Vec<u64> = (0..g.area_m2.len())
+        let rel = triangle_rel_errors(t, &g.triangles, &adjacent, |k| g.area_m2(k));
+        let mut hits: Vec<u64> = (0..g.triangle_count())
             .map(|k| t.triangle_slots(k).iter().sum())
             .collect();
         hits.sort_unstable();
@@ -652,9 +652,9 @@ fn sphere_map_z(seeds: u64, old: bool) -> Vec<f64> {
         );
         for (k, tri) in g.triangles.iter().enumerate() {
             let [a, b, c] = tri.map(|i| g.vertices[i as usize].as_dvec3() + g.origin - source);
-            let exact = flux * solid_angle(a, b, c) / (4.0 * PI * g.area_m2[k]) + indirect;
+            let exact = flux * solid_angle(a, b, c) / (4.0 * PI * g.area_m2(k)) + indirect;
             let e =
-                |parity| triangle_illuminance_lx(t, MapKind::Total, k, g.area_m2[k], flux, parity);
+                |parity| triangle_illuminance_lx(t, MapKind::Total, k, g.area_m2(k), flux, parity);
             let value = e(None);
             let sigma = if old {
                 (e(Some(true)) - e(Some(false))).abs() / 2.0
@@ -776,8 +776,9 @@ fn study_triangle_errors_cost() {
     let g = &s.geometry;
     let start = std::time::Instant::now();
     let adjacent = VertexFaces::new(&g.triangles, g.vertices.len());
-    let rel =
-        luxtally::stats::triangle_rel_errors(&result.tallies, &g.triangles, &adjacent, &g.area_m2);
+    let rel = luxtally::stats::triangle_rel_errors(&result.tallies, &g.triangles, &adjacent, |k| {
+        g.area_m2(k)
+    });
     eprintln!(
         "triangle_rel_errors over {} triangles: {:.1} ms ({})",
         rel.len(),

@@ -800,7 +800,7 @@ fn obj_with_ks_and_ns_loads_a_glossy_material() {
     .unwrap();
     let s = luxtally::scene::load_str("[[objects]]\nfile = \"quad.obj\"\n", &dir, "test.toml")
         .expect("loads");
-    let m = &s.materials[s.geometry.material[0] as usize];
+    let m = &s.materials[s.geometry.material.get(0) as usize];
     assert!((m.reflectance - 0.6 * 0.75).abs() < 1e-6, "{m:?}");
     assert!((m.glossy_reflectance - 0.25).abs() < 1e-6);
     assert!((m.roughness - (2.0f64 / 50.0).sqrt().sqrt()).abs() < 1e-6);

@@ -126,7 +126,7 @@ fn trace(backend: Backend, g: &Geometry, rays: &[(DVec3, DVec3)]) -> (HitBatch, 
 fn world_surface(g: &Geometry, hits: &HitBatch, k: usize) -> Option<(DVec3, Vec3, u32)> {
     let s = hits.surface(k, g)?;
     let object = match s.mapped {
-        Some(t) => g.object[t as usize],
+        Some(t) => g.object.get(t as usize),
         None => g.instanced.instances[hits.inst[k] as usize].object,
     };
     Some((g.origin + s.point.as_dvec3(), s.normal, object))

@@ -272,11 +272,11 @@ fn scene_map_ply_reads_back_to_the_triangle_map() {
         let flux = state.setup.total_flux_lm;
         let adjacent = luxtally::scene::adjacency::VertexFaces::new(&g.triangles, g.vertices.len());
         let rel_errors =
-            luxtally::stats::triangle_rel_errors(t, &g.triangles, &adjacent, &g.area_m2);
+            luxtally::stats::triangle_rel_errors(t, &g.triangles, &adjacent, |k| g.area_m2(k));
         let mut weight = vec![0.0; g.vertices.len()];
         let mut sum = vec![0.0; g.vertices.len()];
         for (k, face) in faces.iter().enumerate() {
-            let a = g.area_m2[k];
+            let a = g.area_m2(k);
             let tri = g.triangles[k];
             assert_eq!(
                 face[..4],

@@ -262,7 +262,7 @@ fn closed_box_wall_shows_direct_plus_indirect_map() {
     let stats = map_stats(
         &result.tallies,
         MapKind::Indirect,
-        &s.geometry.area_m2,
+        &s.geometry,
         result.setup.total_flux_lm,
     );
     let light = DVec3::new(2.0, 1.5, 1.25);
@@ -281,7 +281,7 @@ fn closed_box_wall_shows_direct_plus_indirect_map() {
             let mut hits = Default::default();
             caster.intersect(&rays, &mut hits);
             let k = hits.tri[0] as usize;
-            let n = s.geometry.normal[k].as_dvec3();
+            let n = s.geometry.normal(k).as_dvec3();
             let back = d.dot(n) > 0.0;
             let facing = if back { -n } else { n };
             let p = o + d * hits.t[0] as f64;

@@ -177,8 +177,10 @@ struct TwoLevel {
 /// An obvhs CWBVH over one `Geometry`.
 pub struct ObvhsScene {
     flat: Blas,
-    /// Unit normals per global triangle id (the geometry's own array).
-    normals: Shared<Vec3>,
+    /// The geometry's vertices and triangles (shared, not copied): hits' normals come
+    /// from them, as `Geometry::normal`'s do.
+    vertices: Shared<Vec3>,
+    triangles: Shared<[u32; 3]>,
     two_level: TwoLevel,
 }
 
@@ -187,7 +189,8 @@ impl ObvhsScene {
     pub fn new(geometry: &Geometry) -> ObvhsScene {
         ObvhsScene {
             flat: Blas::new(&geometry.vertices, &geometry.triangles),
-            normals: geometry.normal.clone(),
+            vertices: geometry.vertices.clone(),
+            triangles: geometry.triangles.clone(),
             two_level: TwoLevel::new(geometry),
         }
     }
@@ -357,7 +360,8 @@ impl RayCaster for ObvhsScene {
             if let Some((k, t_hit)) = self.flat.closest(ray) {
                 let (t, u, v) = self.flat.barycentrics(k, &ray, t_hit);
                 let id = self.flat.bvh.primitive_indices[k];
-                let n = self.normals.get(id as usize).copied().unwrap_or(Vec3::ZERO);
+                let [a, b, c] = self.triangles[id as usize].map(|k| self.vertices[k as usize]);
+                let n = crate::scene::triangle_normal(a, b, c);
                 hits.tri[i] = id;
                 hits.set_surface(i, t * DIR_SCALE, u, v, n.to_array());
                 ray.tmax = t_hit;

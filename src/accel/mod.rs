@@ -119,8 +119,10 @@ pub struct HitBatch {
     pub u: Vec<f32>,
     pub v: Vec<f32>,
     /// Unit geometric normal of the hit triangle in the local frame, (v1 − v0) × (v2 − v0)
-    /// orientation; on instances that of the prototype carried by `Instance::normal`
-    /// (a mirrored copy keeps its outside, as a flattened mirrored copy does).
+    /// orientation, from the f32 vertices as traced (Embree's `Ng`; obvhs computes
+    /// `Geometry::normal`): the normal [`HitBatch::surface`] gives mapped triangles.
+    /// On instances that of the prototype carried by `Instance::normal` (a mirrored
+    /// copy keeps its outside, as a flattened mirrored copy does).
     pub ngx: Vec<f32>,
     pub ngy: Vec<f32>,
     pub ngz: Vec<f32>,
@@ -188,12 +190,13 @@ impl HitBatch {
         }
         let t = tri as usize;
         // Hit point from barycentrics: its error scales with the vertices, which the
-        // ray-origin offset is sized for.
+        // ray-origin offset is sized for. The normal is the backend's (normals are not
+        // stored per triangle: see `Geometry`).
         let [a, b, c] = g.triangles[t].map(|i| g.vertices[i as usize]);
         Some(Surface {
             point: a + (b - a) * u + (c - a) * v,
-            normal: g.normal[t],
-            material: g.material[t],
+            normal: Vec3::new(self.ngx[k], self.ngy[k], self.ngz[k]),
+            material: g.material.get(t),
             mapped: Some(tri),
         })
     }

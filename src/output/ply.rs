@@ -28,13 +28,13 @@ pub struct FaceMap {
 pub fn face_map(state: &RunState<'_>, adjacent: &VertexFaces) -> FaceMap {
     let t = state.tallies;
     let g = &state.scene.geometry;
-    let rel_errors = triangle_rel_errors(t, &g.triangles, adjacent, &g.area_m2);
+    let rel_errors = triangle_rel_errors(t, &g.triangles, adjacent, |k| g.area_m2(k));
     let mut m = FaceMap {
         illuminance_lx: Vec::with_capacity(g.triangle_count()),
         indirect_lx: Vec::with_capacity(g.triangle_count()),
         rel_error: Vec::with_capacity(g.triangle_count()),
     };
-    for (k, &a) in g.area_m2.iter().enumerate() {
+    for (k, a) in g.areas_m2().enumerate() {
         let e = |kind, parity| {
             triangle_illuminance_lx(t, kind, k, a, state.setup.total_flux_lm, parity)
         };
@@ -65,9 +65,12 @@ pub fn write_scene_map_ply(state: &RunState<'_>, out: &mut impl Write) -> std::i
     let g = &state.scene.geometry;
     let adjacent = VertexFaces::new(&g.triangles, g.vertices.len());
     let faces = face_map(state, &adjacent);
-    let vertex_lx = vertex_means(&g.triangles, g.vertices.len(), &g.area_m2, |j| {
-        faces.illuminance_lx[j]
-    });
+    let vertex_lx = vertex_means(
+        &g.triangles,
+        g.vertices.len(),
+        |j| g.area_m2(j),
+        |j| faces.illuminance_lx[j],
+    );
     let scale = quantile(&vertex_lx, 0.99, Rank::Nearest, f64::is_finite);
 
     let header = format!(

@@ -288,8 +288,8 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
 fn global(state: &RunState<'_>) -> GlobalSummary {
     let (t, g) = (state.tallies, &state.scene.geometry);
     let flux_lm = state.setup.total_flux_lm;
-    let total = map_stats(t, MapKind::Total, &g.area_m2, flux_lm);
-    let indirect = map_stats(t, MapKind::Indirect, &g.area_m2, flux_lm);
+    let total = map_stats(t, MapKind::Total, g, flux_lm);
+    let indirect = map_stats(t, MapKind::Indirect, g, flux_lm);
     GlobalSummary {
         triangles: g.triangle_count(),
         area_m2: g.total_area_m2(),

@@ -111,11 +111,21 @@ fn faces_of<'a>(
     tallies: &'a Tallies,
     total_flux_lm: f64,
 ) -> impl Iterator<Item = [f64; 2]> + 'a {
-    let areas = &scene.geometry.area_m2;
-    let face = move |k: usize, back: bool| {
-        triangle_face_illuminance_lx(tallies, MapKind::Indirect, k, areas[k], total_flux_lm, back)
-    };
-    (0..areas.len()).map(move |k| [face(k, false), face(k, true)])
+    let g = &scene.geometry;
+    (0..g.triangle_count()).map(move |k| {
+        let area_m2 = g.area_m2(k);
+        let face = |back: bool| {
+            triangle_face_illuminance_lx(
+                tallies,
+                MapKind::Indirect,
+                k,
+                area_m2,
+                total_flux_lm,
+                back,
+            )
+        };
+        [face(false), face(true)]
+    })
 }
 
 /// The file format of [`IndirectMap::save`], written to `w`.
@@ -158,7 +168,7 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
             eat(&x.to_le_bytes());
         }
     }
-    for (t, m) in g.triangles.iter().zip(&g.material) {
+    for (t, m) in g.triangles.iter().zip(g.material.iter()) {
         for i in t {
             eat(&i.to_le_bytes());
         }
@@ -218,9 +228,11 @@ impl IndirectField {
             .enumerate()
             .map(|(k, t)| {
                 t.map(|i| {
-                    let same_side = |j: usize| !(g.normal[j].dot(g.normal[k]) < CREASE_COS);
+                    let normal = g.normal(k);
+                    let same_side = |j: usize| !(g.normal(j).dot(normal) < CREASE_COS);
+                    let area_m2 = |j: usize| g.area_m2(j);
                     adjacent
-                        .area_weighted_mean(i as usize, &g.area_m2, same_side, |j| map.face_lx[j])
+                        .area_weighted_mean(i as usize, area_m2, same_side, |j| map.face_lx[j])
                         .unwrap_or(map.face_lx[k])
                 })
             })

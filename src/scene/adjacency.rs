@@ -9,13 +9,13 @@
 pub fn vertex_means(
     triangles: &[[u32; 3]],
     vertex_count: usize,
-    area_m2: &[f64],
+    area_m2: impl Fn(usize) -> f64,
     value: impl Fn(usize) -> f64,
 ) -> Vec<f64> {
     let mut sum = vec![0.0f64; vertex_count];
     let mut area = vec![0.0f64; vertex_count];
     for (j, t) in triangles.iter().enumerate() {
-        let (a, x) = (area_m2[j], value(j));
+        let (a, x) = (area_m2(j), value(j));
         for &v in t {
             sum[v as usize] += a * x;
             area[v as usize] += a;
@@ -65,7 +65,7 @@ impl VertexFaces {
     pub fn area_weighted_mean<const N: usize>(
         &self,
         v: usize,
-        area_m2: &[f64],
+        area_m2: impl Fn(usize) -> f64,
         keep: impl Fn(usize) -> bool,
         value: impl Fn(usize) -> [f64; N],
     ) -> Option<[f64; N]> {
@@ -75,7 +75,7 @@ impl VertexFaces {
             if !keep(j) {
                 continue;
             }
-            let (a, x) = (area_m2[j], value(j));
+            let (a, x) = (area_m2(j), value(j));
             for c in 0..N {
                 sum[c] += a * x[c];
             }
@@ -93,10 +93,10 @@ mod tests {
     fn vertex_mean_weighs_faces_by_area() {
         let vf = VertexFaces::new(&[[0, 1, 2], [0, 2, 3]], 5);
         assert_eq!(vf.faces(0), &[0, 1]);
-        let mean = vf.area_weighted_mean(0, &[1.0, 3.0], |_| true, |j| [[10.0, 20.0][j]]);
+        let mean = vf.area_weighted_mean(0, |j| [1.0, 3.0][j], |_| true, |j| [[10.0, 20.0][j]]);
         assert_eq!(mean, Some([17.5]));
         assert_eq!(
-            vf.area_weighted_mean(4, &[1.0, 3.0], |_| true, |_| [1.0]),
+            vf.area_weighted_mean(4, |j| [1.0, 3.0][j], |_| true, |_| [1.0]),
             None
         );
     }
@@ -107,9 +107,9 @@ mod tests {
         let area_m2 = [0.1, 0.3, 0.7, 0.0];
         let value = |j: usize| [1.0 / 3.0, 7.1, 0.2, 5.0][j];
         let vf = VertexFaces::new(&triangles, 6);
-        let means = vertex_means(&triangles, 6, &area_m2, value);
+        let means = vertex_means(&triangles, 6, |j| area_m2[j], value);
         for (v, &m) in means.iter().enumerate() {
-            let expected = vf.area_weighted_mean(v, &area_m2, |_| true, |j| [value(j)]);
+            let expected = vf.area_weighted_mean(v, |j| area_m2[j], |_| true, |j| [value(j)]);
             assert_eq!(
                 m.to_bits(),
                 expected.map_or(0.0, |[e]| e).to_bits(),

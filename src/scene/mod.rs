@@ -15,12 +15,18 @@ mod load;
 mod material;
 pub mod mesh_io;
 pub mod shapes;
+mod triangle_ids;
 
 pub use crate::light::Luminaire;
 pub use load::{load, load_str};
 pub use material::{Material, MaterialFile};
+pub use triangle_ids::TriangleIds;
 
 /// All triangles of the scene in one indexed mesh, in the re-centred local frame.
+///
+/// Per triangle only what cannot be recomputed is stored (indices, and material and
+/// object compactly): areas and normals come from the f32 vertices, those of the
+/// triangle actually traced ([`Geometry::area_m2`], [`Geometry::normal`]).
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
     /// World position of the local frame's origin (centre of the scene's bounds).
@@ -30,14 +36,12 @@ pub struct Geometry {
     /// Triangles as vertex indices (shared with Embree).
     pub triangles: Shared<[u32; 3]>,
     /// Material index (into `Scene::materials`) per triangle.
-    pub material: Vec<u32>,
-    /// Triangle area in m², computed in f64 from world coordinates.
-    pub area_m2: Vec<f64>,
-    /// Unit geometric normal per triangle, (v1 − v0) × (v2 − v0) orientation (shared
-    /// with the obvhs backend).
-    pub normal: Shared<Vec3>,
+    pub material: TriangleIds,
     /// Index of the `[[objects]]` entry each triangle came from.
-    pub object: Vec<u32>,
+    pub object: TriangleIds,
+    /// [`Geometry::total_area_m2`], once asked: the vertices and triangles do not
+    /// change after loading (a backend reads them in place).
+    total_area_m2: std::sync::OnceLock<f64>,
     /// Objects without a map (`map = false`): shared meshes placed by transforms, traced
     /// but never tallied. Empty for scenes that map everything.
     pub instanced: Instanced,
@@ -233,9 +237,10 @@ impl Geometry {
         self.triangles.len()
     }
 
-    /// Total geometric area S (one side per triangle).
+    /// Total geometric area S (one side per triangle), summed in triangle order;
+    /// computed once (the statistics ask after every epoch).
     pub fn total_area_m2(&self) -> f64 {
-        self.area_m2.iter().sum()
+        *self.total_area_m2.get_or_init(|| self.areas_m2().sum())
     }
 
     /// Largest coordinate of the local frame (at least the smallest positive f32): the
@@ -478,8 +483,7 @@ impl Geometry {
         prototypes: &[PrototypeMesh],
         placements: &[Placement],
     ) -> Geometry {
-        let mut bounds = Bounds::default();
-        vertices.iter().for_each(|v| bounds.grow(*v));
+        let mut bounds = Bounds::of(vertices);
         // Each prototype centred on its own bounds (f32 vertices), and its centre.
         let (protos, centres): (Vec<Prototype>, Vec<DVec3>) =
             prototypes.iter().map(Prototype::centred).unzip();
@@ -501,49 +505,55 @@ impl Geometry {
             instanced: Instanced::place(protos, &placed, origin),
             ..Geometry::default()
         };
-        g.set_mapped_triangles(vertices, triangles, material, object);
+        g.set_mapped_triangles(triangles, material, object);
         g
     }
 
-    /// Stores the triangles of nonzero area with their material, object, area (f64, from
-    /// the world-space `vertices`) and unit normal; areas and normals are computed in
-    /// parallel (each alone, so the values do not depend on the threads).
-    fn set_mapped_triangles(
-        &mut self,
+    /// As [`Geometry::from_world`] with one material and one object for every triangle,
+    /// `triangles` taken rather than copied (the procedural benchmark scenes: 10⁷
+    /// triangles set up without a second 120 MB array).
+    pub fn uniform(
         vertices: &[DVec3],
-        triangles: &[[u32; 3]],
-        material: &[u32],
-        object: &[u32],
-    ) {
+        triangles: Vec<[u32; 3]>,
+        material: u32,
+        object: u32,
+    ) -> Geometry {
         use rayon::prelude::*;
-        let n = triangles.len();
-        let mut area_m2 = vec![0.0f64; n];
-        let mut normal = vec![Vec3::ZERO; n];
-        (
-            area_m2.par_iter_mut(),
-            normal.par_iter_mut(),
-            triangles.par_iter(),
-        )
-            .into_par_iter()
-            .for_each(|(area, normal, tri)| {
-                let [a, b, c] = tri.map(|i| vertices[i as usize]);
-                let cross = (b - a).cross(c - a);
-                *area = 0.5 * cross.length();
-                if *area > 0.0 {
-                    *normal = (cross / (2.0 * *area)).as_vec3();
-                }
-            });
-        let keep = |k: &usize| area_m2[*k] > 0.0;
-        if (0..n).all(|k| keep(&k)) {
-            self.triangles = triangles.to_vec().into();
-            self.material = material.to_vec();
-            self.object = object.to_vec();
-            self.area_m2 = area_m2;
-            self.normal = normal.into();
+        let origin = Bounds::of(vertices).centre();
+        let mut g = Geometry {
+            origin,
+            vertices: Shared::padded(local_vertices(vertices, origin)),
+            ..Geometry::default()
+        };
+        let keep = |t: &[u32; 3]| g.cross_f64(*t).length() > 0.0;
+        let triangles = if triangles.par_iter().all(keep) {
+            triangles
+        } else {
+            // Triangles of zero (or NaN) area can never be hit and have no illuminance.
+            triangles.into_par_iter().filter(keep).collect()
+        };
+        g.material = TriangleIds::constant(material, triangles.len());
+        g.object = TriangleIds::constant(object, triangles.len());
+        g.triangles = triangles.into();
+        g
+    }
+
+    /// Stores the triangles of nonzero area (as traced: from the f32 local vertices)
+    /// with their material and object.
+    fn set_mapped_triangles(&mut self, triangles: &[[u32; 3]], material: &[u32], object: &[u32]) {
+        use rayon::prelude::*;
+        let keep = |t: &[u32; 3]| self.cross_f64(*t).length() > 0.0;
+        if triangles.par_iter().all(keep) {
+            self.triangles = triangles.par_iter().copied().collect::<Vec<_>>().into();
+            self.material = TriangleIds::new(material);
+            self.object = TriangleIds::new(object);
             return;
         }
         // Triangles of zero (or NaN) area can never be hit and have no illuminance.
-        let kept: Vec<usize> = (0..n).filter(keep).collect();
+        let kept: Vec<usize> = (0..triangles.len())
+            .into_par_iter()
+            .filter(|&k| keep(&triangles[k]))
+            .collect();
         self.triangles = kept
             .iter()
             .map(|&k| triangles[k])
@@ -551,16 +561,57 @@ impl Geometry {
             .into();
         self.material = kept.iter().map(|&k| material[k]).collect();
         self.object = kept.iter().map(|&k| object[k]).collect();
-        self.area_m2 = kept.iter().map(|&k| area_m2[k]).collect();
-        self.normal = kept.iter().map(|&k| normal[k]).collect::<Vec<_>>().into();
     }
+
+    /// (v1 − v0) × (v2 − v0) of the triangle with vertex indices `tri`, in f64 from the
+    /// stored f32 vertices: twice its area along its normal.
+    #[inline(always)]
+    fn cross_f64(&self, tri: [u32; 3]) -> DVec3 {
+        let [a, b, c] = tri.map(|i| self.vertices[i as usize].as_dvec3());
+        (b - a).cross(c - a)
+    }
+
+    /// Area in m² of triangle `t` as traced (its f32 local vertices, computed in f64).
+    /// Not stored: 8 bytes per triangle at 10⁷ triangles are worth more than the few
+    /// passes over every triangle (statistics, outputs) that recompute it.
+    #[inline]
+    pub fn area_m2(&self, t: usize) -> f64 {
+        0.5 * self.cross_f64(self.triangles[t]).length()
+    }
+
+    /// Every triangle's area in m² ([`Geometry::area_m2`]), in triangle order.
+    pub fn areas_m2(&self) -> impl ExactSizeIterator<Item = f64> + Clone + '_ {
+        (0..self.triangles.len()).map(|t| self.area_m2(t))
+    }
+
+    /// Unit geometric normal of triangle `t`, (v1 − v0) × (v2 − v0) orientation
+    /// ([`triangle_normal`] of its stored vertices).
+    #[inline]
+    pub fn normal(&self, t: usize) -> Vec3 {
+        let [a, b, c] = self.triangles[t].map(|i| self.vertices[i as usize]);
+        triangle_normal(a, b, c)
+    }
+}
+
+/// The unit normal of the triangle a, b, c, (b − a) × (c − a) orientation, computed in
+/// f64 (so that every triangle of nonzero area as traced has one) and rounded to f32.
+/// Not stored per triangle: a hit computes it from the vertices it reads anyway.
+#[inline(always)]
+pub fn triangle_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
+    let n = (b - a).cross(c - a);
+    (n / n.length()).as_vec3()
 }
 
 /// World-space vertices in the local frame at `origin`, with room for one more (see
 /// [`Shared::padded`]: no reallocation there).
 fn local_vertices(vertices: &[DVec3], origin: DVec3) -> Vec<Vec3> {
+    use rayon::prelude::*;
     let mut local = Vec::with_capacity(vertices.len() + 1);
-    local.extend(vertices.iter().map(|v| (*v - origin).as_vec3()));
+    vertices
+        .par_iter()
+        .map(|v| (*v - origin).as_vec3())
+        .collect_into_vec(&mut local);
     local
 }
 
@@ -569,6 +620,17 @@ fn local_vertices(vertices: &[DVec3], origin: DVec3) -> Vec<Vec3> {
 struct Bounds(Option<(DVec3, DVec3)>);
 
 impl Bounds {
+    /// The box of `points`, found in parallel (min and max do not depend on the order).
+    fn of(points: &[DVec3]) -> Bounds {
+        use rayon::prelude::*;
+        let inf = DVec3::splat(f64::INFINITY);
+        let (lo, hi) = points
+            .par_iter()
+            .fold(|| (inf, -inf), |(lo, hi), p| (lo.min(*p), hi.max(*p)))
+            .reduce(|| (inf, -inf), |(a, b), (c, d)| (a.min(c), b.max(d)));
+        Bounds((!points.is_empty()).then_some((lo, hi)))
+    }
+
     fn grow(&mut self, p: DVec3) {
         self.0 = Some(match self.0 {
             None => (p, p),

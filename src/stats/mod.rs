@@ -4,6 +4,7 @@
 pub mod forecast;
 pub mod stop;
 
+use crate::scene::Geometry;
 use crate::tally::{CellSums, Counts, Slot, Tallies};
 
 /// Relative error reported for a value of 0 whose σ is known: 100 %, so no relative
@@ -458,9 +459,9 @@ pub fn triangle_rel_errors(
     t: &Tallies,
     triangles: &[[u32; 3]],
     adjacent: &crate::scene::adjacency::VertexFaces,
-    areas_m2: &[f64],
+    area_m2: impl Fn(usize) -> f64,
 ) -> Vec<f64> {
-    let counts: Vec<(u64, u64)> = (0..areas_m2.len())
+    let counts: Vec<(u64, u64)> = (0..triangles.len())
         .map(|k| parity_counts(&t.triangle_slots(k), MapKind::Total))
         .collect();
     let (mut d2, mut total) = (0.0f64, 0.0f64);
@@ -471,11 +472,14 @@ pub fn triangle_rel_errors(
     let dispersion = if total > 0.0 { d2 / total } else { 1.0 };
     let density: Vec<f64> = counts
         .iter()
-        .zip(areas_m2)
-        .map(|(&(o, e), &a)| if a > 0.0 { (o + e) as f64 / a } else { 0.0 })
+        .enumerate()
+        .map(|(k, &(o, e))| match area_m2(k) {
+            a if a > 0.0 => (o + e) as f64 / a,
+            _ => 0.0,
+        })
         .collect();
     let mut nb: Vec<f64> = Vec::new();
-    let mut rel = Vec::with_capacity(areas_m2.len());
+    let mut rel = Vec::with_capacity(triangles.len());
     for (k, (&(o, e), tri)) in counts.iter().zip(triangles).enumerate() {
         let c = (o + e) as f64;
         if c == 0.0 {
@@ -501,7 +505,7 @@ pub fn triangle_rel_errors(
                 } else {
                     0.5 * (below.iter().copied().fold(f64::MIN, f64::max) + upper)
                 };
-                median * areas_m2[k]
+                median * area_m2(k)
             }
         };
         let var = dispersion * pooled_variance(c, c.sqrt(), lambda);
@@ -510,9 +514,11 @@ pub fn triangle_rel_errors(
     rel
 }
 
-/// Mean illuminance and odd/even error of a scene map (eqs. 4–5, σ = d/2).
-pub fn map_stats(t: &Tallies, kind: MapKind, areas_m2: &[f64], total_flux_lm: f64) -> MapStats {
-    let total_area: f64 = areas_m2.iter().sum();
+/// Mean illuminance and odd/even error of a scene map (eqs. 4–5, σ = d/2) over the
+/// triangles of `g`. Runs after every epoch: triangles no photon reached add nothing
+/// (exactly 0 to each sum) and are skipped before their area is computed.
+pub fn map_stats(t: &Tallies, kind: MapKind, g: &Geometry, total_flux_lm: f64) -> MapStats {
+    let total_area = g.total_area_m2();
     let (n_odd, n_even) = t.odd_even_photons();
     if total_area <= 0.0 || t.photons == 0 {
         return MapStats {
@@ -536,8 +542,12 @@ pub fn map_stats(t: &Tallies, kind: MapKind, areas_m2: &[f64], total_flux_lm: f6
         0.0
     };
     let (mut sum_e, mut sum_e2, mut sum_d2) = (0.0, 0.0, 0.0);
-    for (k, &a) in areas_m2.iter().enumerate() {
+    for k in 0..g.triangle_count() {
         let (odd, even) = parity_counts(&t.triangle_slots(k), kind);
+        if odd == 0 && even == 0 {
+            continue;
+        }
+        let a = g.area_m2(k);
         let e = per_photon * (odd + even) as f64 / a;
         sum_e += a * e;
         sum_e2 += a * e * e;
