@@ -21,7 +21,7 @@ pub mod scatter;
 
 use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng::photon_stream;
-use crate::sampling::{cosine_hemisphere, uniform};
+use crate::sampling::{cosine_from_square, uniform, uniform_f32};
 use crate::scene::{Estimator, Geometry, Scene};
 use crate::tally::{CellPartial, ChunkTally, ReceiverGrid, Tallies};
 use bsdf::{Bsdf, LobeKind, Transport};
@@ -85,8 +85,13 @@ pub struct Scratch {
     shadow_rays: RayBatch,
     shadow_scores: Vec<(u32, u32, f64)>,
     occluded: Vec<bool>,
-    /// Diffuse survivors of a bounce, whose directions are sampled in a pass of their own.
-    diffuse: Vec<DiffuseSlot>,
+    /// Diffuse survivors of a bounce, whose directions are sampled in a pass of their
+    /// own (f32 lanes): their slots in the batch, the normals of the hemispheres they
+    /// scatter into, their two random numbers and their new directions.
+    diffuse_slot: Vec<u32>,
+    diffuse_towards: [Vec<f32>; 3],
+    diffuse_draws: [Vec<f32>; 2],
+    diffuse_dir: [Vec<f32>; 3],
     /// Which segments of the batch cross the receiver being scored.
     marks: Vec<bool>,
     /// Per survivor, the normal of the side it leaves its surface on.
@@ -96,25 +101,19 @@ pub struct Scratch {
 impl Scratch {
     /// Sizes the per-bounce arrays of pass 2 and 3 for `n` lanes.
     fn size_bounce_arrays(&mut self, n: usize) {
-        if self.diffuse.len() < n {
-            self.diffuse.resize(n, DiffuseSlot::default());
+        if self.diffuse_slot.len() < n {
+            self.diffuse_slot.resize(n, 0);
         }
-        for v in &mut self.side {
+        for v in (self.side.iter_mut())
+            .chain(&mut self.diffuse_towards)
+            .chain(&mut self.diffuse_draws)
+            .chain(&mut self.diffuse_dir)
+        {
             if v.len() < n {
                 v.resize(n, 0.0);
             }
         }
     }
-}
-
-/// A diffuse survivor: its slot in the batch and the hemisphere it scatters into, the
-/// hit triangle's normal (f32, as stored) or its opposite.
-#[derive(Clone, Copy, Debug, Default)]
-struct DiffuseSlot {
-    slot: u32,
-    /// Scatter to the side opposite `normal`.
-    flip: bool,
-    normal: Vec3,
 }
 
 /// Where a photon's current segment started.
@@ -289,13 +288,12 @@ impl<'a> Tracer<'a> {
                 .rng
                 .push(photon_stream(self.seed, first + offset as u64));
         }
-        for (k, rng) in lanes.rng.iter_mut().enumerate() {
-            let index = first + k as u64;
-            let (o, d) = self.emitters.sample(self.emitters.light_of(index), rng);
-            let (o, d) = (o.as_vec3(), d.as_vec3());
-            (rays.ox[k], rays.oy[k], rays.oz[k]) = (o.x, o.y, o.z);
-            (rays.dx[k], rays.dy[k], rays.dz[k]) = (d.x, d.y, d.z);
-        }
+        self.emitters.sample_lanes(
+            first,
+            &mut lanes.rng,
+            [&mut rays.ox, &mut rays.oy, &mut rays.oz],
+            [&mut rays.dx, &mut rays.dy, &mut rays.dz],
+        );
         // The parity of a photon's index is that of its chunk offset, flipped when the
         // chunk starts at an odd index.
         let odd_first = first % 2 == 1;
@@ -339,7 +337,7 @@ impl<'a> Tracer<'a> {
 
     /// Pass 2 of [`Self::step`]: deposit, connect and play the roulette at each hit,
     /// compacting the survivors in place. Returns how many survive and how many of them
-    /// scatter diffusely (their slots in `s.diffuse`).
+    /// scatter diffusely (their slots in `s.diffuse_slot`).
     fn hits_pass(
         &self,
         s: &mut Scratch,
@@ -354,7 +352,9 @@ impl<'a> Tracer<'a> {
         let (segments, rngs) = (&mut lanes.segment[..n], &mut lanes.rng[..n]);
         // Diffuse survivors whose direction pass 3 samples. Written for every
         // Lambertian hit and kept by advancing `m`, so the roulette is no branch.
-        let diffuse = &mut s.diffuse[..n];
+        let diffuse_slot = &mut s.diffuse_slot[..n];
+        let [tx, ty, tz] = &mut s.diffuse_towards;
+        let (tx, ty, tz) = (&mut tx[..n], &mut ty[..n], &mut tz[..n]);
         let mut m = 0;
         // Survivors leave their hit points along these normals (pass 3).
         let [sx, sy, sz] = &mut s.side;
@@ -400,7 +400,7 @@ impl<'a> Tracer<'a> {
             }
             if surfacing.lambert_only {
                 // `Bsdf::sample`'s roulette and diffuse lobe for a material with no other
-                // lobe: the same draws, the same numbers. The slot is written whatever
+                // lobe: the same draws; the direction is sampled in f32 (pass 3). The slot is written whatever
                 // the roulette says and kept only if the photon survives.
                 let survives = uniform(&mut rngs[k]) < surfacing.bsdf.diffuse().0;
                 (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
@@ -409,11 +409,9 @@ impl<'a> Tracer<'a> {
                 bounces[j] = hit_bounces + 1;
                 segments[j] = Segment::Diffuse;
                 rngs[j] = rngs[k].clone();
-                diffuse[m] = DiffuseSlot {
-                    slot: j as u32,
-                    flip: !(cos_in < 0.0),
-                    normal,
-                };
+                diffuse_slot[m] = j as u32;
+                let towards = if cos_in < 0.0 { normal } else { -normal };
+                (tx[m], ty[m], tz[m]) = (towards.x, towards.y, towards.z);
                 let (kept, ended) = (survives as usize, !survives as u64);
                 tally.record_histories(hit_bounces + 1, ended);
                 j += kept;
@@ -456,12 +454,28 @@ impl<'a> Tracer<'a> {
             [&sx[..j], &sy[..j], &sz[..j]],
             self.scene_scale,
         );
-        for &DiffuseSlot { slot, flip, normal } in &s.diffuse[..diffuse] {
+        // In f32 lanes (the directions go straight to the ray caster, which takes f32):
+        // each photon's two draws from its own stream, then the branch-free map, which
+        // vectorises, then the directions into their slots.
+        let m = diffuse;
+        let [du, dv] = &mut s.diffuse_draws;
+        let (du, dv) = (&mut du[..m], &mut dv[..m]);
+        for ((&slot, u), v) in s.diffuse_slot[..m].iter().zip(&mut *du).zip(&mut *dv) {
+            let rng = &mut rngs[slot as usize];
+            *u = uniform_f32(rng);
+            *v = uniform_f32(rng);
+        }
+        let [ex, ey, ez] = &mut s.diffuse_dir;
+        let (ex, ey, ez) = (&mut ex[..m], &mut ey[..m], &mut ez[..m]);
+        let [tx, ty, tz] = &s.diffuse_towards;
+        let (tx, ty, tz) = (&tx[..m], &ty[..m], &tz[..m]);
+        for i in 0..m {
+            let d = cosine_from_square(du[i], dv[i], Vec3::new(tx[i], ty[i], tz[i]));
+            (ex[i], ey[i], ez[i]) = (d.x, d.y, d.z);
+        }
+        for (i, &slot) in s.diffuse_slot[..m].iter().enumerate() {
             let slot = slot as usize;
-            let n_d = normal.as_dvec3();
-            let towards = if flip { -n_d } else { n_d };
-            let d = cosine_hemisphere(&mut rngs[slot], towards).as_vec3();
-            (rays.dx[slot], rays.dy[slot], rays.dz[slot]) = (d.x, d.y, d.z);
+            (rays.dx[slot], rays.dy[slot], rays.dz[slot]) = (ex[i], ey[i], ez[i]);
         }
         rays.truncate(j);
         s.lanes.truncate(j);
