@@ -64,9 +64,10 @@ fn concentric(a: f64, b: f64) -> (f64, f64) {
     (if wide { p } else { q }, if wide { q } else { p })
 }
 
-/// [`concentric`] in f32.
+/// [`concentric`] in f32, with the radius: (x, y, r), r = √(x² + y²) exactly (|a| or
+/// |b|), so that 1 − r² can be formed as (1 − r)(1 + r) without cancellation.
 #[inline(always)]
-fn concentric_f32(a: f32, b: f32) -> (f32, f32) {
+fn concentric_f32(a: f32, b: f32) -> (f32, f32, f32) {
     // Selects, not branches: which of |a|, |b| is larger is a coin toss.
     let wide = a.abs() > b.abs();
     let hi = if wide { a } else { b };
@@ -74,7 +75,7 @@ fn concentric_f32(a: f32, b: f32) -> (f32, f32) {
     let t = lo / if hi == 0.0 { 1.0 } else { hi };
     let (c, s) = cos_sin_quarter_f32(std::f32::consts::FRAC_PI_4 * t);
     let (p, q) = (hi * c, hi * s);
-    (if wide { p } else { q }, if wide { q } else { p })
+    (if wide { p } else { q }, if wide { q } else { p }, hi.abs())
 }
 
 /// A point uniformly distributed in the unit disk (two draws, concentric map).
@@ -90,7 +91,8 @@ pub fn unit_disk(rng: &mut Pcg32) -> (f64, f64) {
 pub fn unit_disk_f32(rng: &mut Pcg32) -> (f32, f32) {
     let a = 2.0 * uniform_f32(rng) - 1.0;
     let b = 2.0 * uniform_f32(rng) - 1.0;
-    concentric_f32(a, b)
+    let (x, y, _) = concentric_f32(a, b);
+    (x, y)
 }
 
 /// Two unit vectors completing `n` (unit) to an orthonormal basis (Duff et al. 2017).
@@ -123,7 +125,7 @@ pub fn basis_f32(n: Vec3) -> (Vec3, Vec3) {
 pub fn uniform_sphere(rng: &mut Pcg32) -> DVec3 {
     let (x, y) = unit_disk(rng);
     let r2 = x * x + y * y;
-    let s = 2.0 * (1.0 - r2).sqrt();
+    let s = 2.0 * (1.0 - r2).max(0.0).sqrt();
     DVec3::new(x * s, y * s, 1.0 - 2.0 * r2)
 }
 
@@ -167,8 +169,8 @@ pub fn cosine_hemisphere_f32(rng: &mut Pcg32, n: Vec3) -> Vec3 {
 /// normalised.
 #[inline(always)]
 pub fn cosine_from_square(u: f32, v: f32, n: Vec3) -> Vec3 {
-    let (x, y) = concentric_f32(2.0 * u - 1.0, 2.0 * v - 1.0);
-    let z = (1.0 - x * x - y * y).max(0.0).sqrt();
+    let (x, y, r) = concentric_f32(2.0 * u - 1.0, 2.0 * v - 1.0);
+    let z = ((1.0 - r) * (1.0 + r)).sqrt();
     let (t, b) = basis_f32(n);
     t * x + b * y + n * z
 }
@@ -178,10 +180,11 @@ pub fn cosine_from_square(u: f32, v: f32, n: Vec3) -> Vec3 {
 /// [`cosine_from_square`]).
 #[inline(always)]
 pub fn sphere_from_square(u: f32, v: f32) -> Vec3 {
-    let (x, y) = concentric_f32(2.0 * u - 1.0, 2.0 * v - 1.0);
-    let r2 = x * x + y * y;
-    let s = 2.0 * (1.0 - r2).max(0.0).sqrt();
-    Vec3::new(x * s, y * s, 1.0 - 2.0 * r2)
+    let (x, y, r) = concentric_f32(2.0 * u - 1.0, 2.0 * v - 1.0);
+    // 1 − r² without cancellation near the rim (the pole z = −1).
+    let one_minus_r2 = (1.0 - r) * (1.0 + r);
+    let s = 2.0 * one_minus_r2.sqrt();
+    Vec3::new(x * s, y * s, 2.0 * one_minus_r2 - 1.0)
 }
 
 /// The unit direction at polar angle acos(cos_t) and azimuth `phi` about `n`.
