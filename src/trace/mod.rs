@@ -400,8 +400,8 @@ impl<'a> Tracer<'a> {
             }
             if surfacing.lambert_only {
                 // `Bsdf::sample`'s roulette and diffuse lobe for a material with no other
-                // lobe: the same draws; the direction is sampled in f32 (pass 3). The slot is written whatever
-                // the roulette says and kept only if the photon survives.
+                // lobe: the same draws (the direction's, in f32, in pass 3). The slot is
+                // written whatever the roulette says and kept only if the photon survives.
                 let survives = uniform(&mut rngs[k]) < surfacing.bsdf.diffuse().0;
                 (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
                 (sx[j], sy[j], sz[j]) = (facing.x, facing.y, facing.z);
