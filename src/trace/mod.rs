@@ -21,13 +21,14 @@ pub mod scatter;
 
 use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng::photon_stream;
-use crate::sampling::{cosine_from_square, uniform, uniform_f32};
+use crate::sampling::{cosine_from_square, uniform_f32};
 use crate::scene::{Estimator, Geometry, Scene};
-use crate::tally::{CellPartial, ChunkTally, ReceiverGrid, Tallies};
+use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid, Tallies};
 use bsdf::{Bsdf, LobeKind, Transport};
 use direct::DirectLight;
 use emit::Emitters;
 use glam::{DVec3, Vec3};
+use rand::RngCore;
 use rand_pcg::Pcg32;
 use scatter::{offset_origin, offset_origins, scatter};
 
@@ -86,10 +87,9 @@ pub struct Scratch {
     shadow_scores: Vec<(u32, u32, f64)>,
     occluded: Vec<bool>,
     /// Diffuse survivors of a bounce, whose directions are sampled in a pass of their
-    /// own (f32 lanes): their slots in the batch, the normals of the hemispheres they
-    /// scatter into, their two random numbers and their new directions.
+    /// own (f32 lanes): their slots in the batch (each scatters into the hemisphere of
+    /// its `side`), their two random numbers and their new directions.
     diffuse_slot: Vec<u32>,
-    diffuse_towards: [Vec<f32>; 3],
     diffuse_draws: [Vec<f32>; 2],
     diffuse_dir: [Vec<f32>; 3],
     /// Which segments of the batch cross the receiver being scored.
@@ -105,7 +105,6 @@ impl Scratch {
             self.diffuse_slot.resize(n, 0);
         }
         for v in (self.side.iter_mut())
-            .chain(&mut self.diffuse_towards)
             .chain(&mut self.diffuse_draws)
             .chain(&mut self.diffuse_dir)
         {
@@ -151,8 +150,10 @@ impl Segment {
 struct Lanes {
     /// Photon index within the chunk.
     offset: Vec<u32>,
-    /// Surface hits so far (the first is direct light, the rest indirect).
-    bounces: Vec<u32>,
+    /// Surface hits so far (the first is direct light, the rest indirect): the same for
+    /// every live photon, since all start together and each bounce ends or advances
+    /// every one of them.
+    bounces: u32,
     /// Where the current segment started.
     segment: Vec<Segment>,
     rng: Vec<Pcg32>,
@@ -161,7 +162,6 @@ struct Lanes {
 impl Lanes {
     fn truncate(&mut self, n: usize) {
         self.offset.truncate(n);
-        self.bounces.truncate(n);
         self.segment.truncate(n);
         self.rng.truncate(n);
     }
@@ -180,6 +180,9 @@ struct Surfacing {
     /// Diffuse reflection is its only lobe: the roulette is one comparison with ρ
     /// (the same number [`Bsdf::sample`] draws and compares, so the same path).
     lambert_only: bool,
+    /// A photon survives that roulette when its 32-bit draw x is below this:
+    /// x < ⌈ρ·2³²⌉ ⇔ x·2⁻³² < ρ, [`crate::sampling::uniform`]'s comparison, in integers.
+    survives_below: u64,
 }
 
 impl Surfacing {
@@ -188,9 +191,16 @@ impl Surfacing {
             connectable: bsdf.connectable(),
             glossy_connectable: bsdf.glossy_connectable(),
             lambert_only: bsdf.lambert_only(),
+            survives_below: survival_threshold(bsdf.diffuse().0),
             bsdf,
         }
     }
+}
+
+/// ⌈ρ·2³²⌉: for every 32-bit x, x < it exactly when x·2⁻³² < ρ (both sides exact in
+/// f64: ρ·2³² is ρ scaled by a power of two, x·2⁻³² a 32-bit integer scaled).
+fn survival_threshold(rho: f64) -> u64 {
+    (rho.clamp(0.0, 1.0) * 4_294_967_296.0).ceil() as u64
 }
 
 impl<'a> Tracer<'a> {
@@ -278,16 +288,13 @@ impl<'a> Tracer<'a> {
         rays.reset_closest_hit(live);
         let lanes = &mut scratch.lanes;
         lanes.truncate(0);
-        lanes.bounces.resize(live, 0);
+        lanes.bounces = 0;
         lanes.segment.resize(live, Segment::Emitted);
         scratch.pending.clear();
         // Streams first, then emission: two short loops whose iterations overlap.
-        for offset in 0..live as u32 {
-            lanes.offset.push(offset);
-            lanes
-                .rng
-                .push(photon_stream(self.seed, first + offset as u64));
-        }
+        lanes.offset.extend(0..live as u32);
+        let seed = self.seed;
+        (lanes.rng).extend((0..live as u64).map(|offset| photon_stream(seed, first + offset)));
         self.emitters.sample_lanes(
             first,
             &mut lanes.rng,
@@ -309,11 +316,12 @@ impl<'a> Tracer<'a> {
         );
     }
 
-    /// One bounce of every live photon, in three passes over the batch, each a short
-    /// loop the processor overlaps from lane to lane: score the receivers the segments
-    /// cross; then deposit, connect and play the roulette at each hit, compacting the
-    /// survivors in place (lane order kept); then sample the diffuse survivors' new
-    /// directions. Each photon draws its random numbers in the same order as ever.
+    /// One bounce of every live photon, in short passes over the batch, each a loop the
+    /// processor overlaps from lane to lane: score the receivers the segments cross;
+    /// look up the surfaces hit; then deposit, connect and play the roulette at each
+    /// hit, compacting the survivors in place (lane order kept); then sample the diffuse
+    /// survivors' new directions. Each photon draws its random numbers in the same order
+    /// as ever.
     fn step(&self, s: &mut Scratch, tally: &mut ChunkTally, flux: f64, odd_first: bool) {
         s.shadow_rays.clear();
         s.shadow_scores.clear();
@@ -348,23 +356,32 @@ impl<'a> Tracer<'a> {
         let (n, hits, rays, lanes) = (s.rays.len(), &s.hits, &mut s.rays, &mut s.lanes);
         let (ox, oy, oz) = (&mut rays.ox[..n], &mut rays.oy[..n], &mut rays.oz[..n]);
         let (dx, dy, dz) = (&mut rays.dx[..n], &mut rays.dy[..n], &mut rays.dz[..n]);
-        let (offsets, bounces) = (&mut lanes.offset[..n], &mut lanes.bounces[..n]);
-        let (segments, rngs) = (&mut lanes.segment[..n], &mut lanes.rng[..n]);
+        let (offsets, segments) = (&mut lanes.offset[..n], &mut lanes.segment[..n]);
+        let rngs = &mut lanes.rng[..n];
+        // Every live photon has hit as often: the first hit is direct light.
+        let hit_bounces = lanes.bounces;
+        let (indirect, capped) = (hit_bounces > 0, hit_bounces >= self.max_bounces);
+        // Deposits are written for every hit and kept by advancing `d` where the
+        // triangle holds a map: no branch.
+        let first_deposit = tally.deposits.len();
+        tally.deposits.resize(first_deposit + n, 0);
+        let deposits = &mut tally.deposits[first_deposit..];
+        let mut d = 0;
         // Diffuse survivors whose direction pass 3 samples. Written for every
         // Lambertian hit and kept by advancing `m`, so the roulette is no branch.
         let diffuse_slot = &mut s.diffuse_slot[..n];
-        let [tx, ty, tz] = &mut s.diffuse_towards;
-        let (tx, ty, tz) = (&mut tx[..n], &mut ty[..n], &mut tz[..n]);
         let mut m = 0;
         // Survivors leave their hit points along these normals (pass 3).
         let [sx, sy, sz] = &mut s.side;
         let (sx, sy, sz) = (&mut sx[..n], &mut sy[..n], &mut sz[..n]);
+        // Histories that end here: rays that left the scene after `hit_bounces` hits,
+        // photons absorbed (or stopped by the bounce cap) at this hit.
+        let (mut escaped, mut ended) = (0u64, 0u64);
         // Survivors so far: lane k's successor is written at j ≤ k.
         let mut j = 0;
         for k in 0..n {
-            let hit_bounces = bounces[k];
             let Some(surface) = hits.surface(k, self.geometry) else {
-                tally.record_history_hits(hit_bounces);
+                escaped += 1;
                 continue;
             };
             let dir = DVec3::new(dx[k] as f64, dy[k] as f64, dz[k] as f64);
@@ -374,10 +391,11 @@ impl<'a> Tracer<'a> {
             let cos_in = dir.dot(n_d);
             let back_face = cos_in > 0.0;
             // Unmapped (instanced) objects scatter and occlude but hold no tallies.
-            if let Some(tri) = surface.mapped {
-                let odd = (offset % 2 == 1) != odd_first;
-                tally.deposit(tri, back_face, hit_bounces > 0, odd);
-            }
+            let (tri, has_map) = (surface.mapped.unwrap_or(0), surface.mapped.is_some());
+            let odd = (offset % 2 == 1) != odd_first;
+            let code_tri = tri;
+            deposits[d] = deposit_code(code_tri, back_face, indirect, odd);
+            d += has_map as usize;
             let p = surface.point;
             let facing = if back_face { -normal } else { normal };
             let surfacing = &self.surfacings[surface.material as usize];
@@ -393,46 +411,46 @@ impl<'a> Tracer<'a> {
                     &mut s.shadow_scores,
                 );
             }
-            if hit_bounces >= self.max_bounces {
+            if capped {
                 tally.killed_by_bounce_cap += 1;
-                tally.record_history_hits(hit_bounces + 1);
+                ended += 1;
                 continue;
             }
             if surfacing.lambert_only {
                 // `Bsdf::sample`'s roulette and diffuse lobe for a material with no other
-                // lobe: the same draws (the direction's, in f32, in pass 3). The slot is
-                // written whatever the roulette says and kept only if the photon survives.
-                let survives = uniform(&mut rngs[k]) < surfacing.bsdf.diffuse().0;
+                // lobe: the same draws (the direction's, in f32, in pass 3, into the
+                // hemisphere the photon arrived from). The slot is written whatever the
+                // roulette says and kept only if the photon survives.
+                let survives = (rngs[k].next_u32() as u64) < surfacing.survives_below;
                 (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
                 (sx[j], sy[j], sz[j]) = (facing.x, facing.y, facing.z);
                 offsets[j] = offset;
-                bounces[j] = hit_bounces + 1;
                 segments[j] = Segment::Diffuse;
                 rngs[j] = rngs[k].clone();
                 diffuse_slot[m] = j as u32;
-                let towards = if cos_in < 0.0 { normal } else { -normal };
-                (tx[m], ty[m], tz[m]) = (towards.x, towards.y, towards.z);
-                let (kept, ended) = (survives as usize, !survives as u64);
-                tally.record_histories(hit_bounces + 1, ended);
+                let kept = survives as usize;
+                ended += !survives as u64;
                 j += kept;
                 m += kept;
                 continue;
             }
             let Some(sample) = scatter(&surfacing.bsdf, dir, n_d, &mut rngs[k]) else {
-                tally.record_history_hits(hit_bounces + 1);
+                ended += 1;
                 continue;
             };
             let side = if sample.transmitted { -facing } else { facing };
-            let d = sample.dir.as_vec3();
+            let w = sample.dir.as_vec3();
             (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
             (sx[j], sy[j], sz[j]) = (side.x, side.y, side.z);
-            (dx[j], dy[j], dz[j]) = (d.x, d.y, d.z);
+            (dx[j], dy[j], dz[j]) = (w.x, w.y, w.z);
             offsets[j] = offset;
-            bounces[j] = hit_bounces + 1;
             segments[j] = Segment::after(sample.kind, surfacing.glossy_connectable);
             rngs[j] = rngs[k].clone();
             j += 1;
         }
+        tally.deposits.truncate(first_deposit + d);
+        tally.record_histories(hit_bounces, escaped);
+        tally.record_histories(hit_bounces + 1, ended);
         (j, m)
     }
 
@@ -449,36 +467,53 @@ impl<'a> Tracer<'a> {
         let rays = &mut s.rays;
         let [sx, sy, sz] = &s.side;
         let rngs = &mut s.lanes.rng;
+        // In f32 lanes (the directions go straight to the ray caster, which takes f32):
+        // each photon's two draws from its own stream, then the branch-free map about
+        // the normal of the side it leaves on, which vectorises, then the directions
+        // into their slots.
+        let m = diffuse;
+        let [du, dv] = &mut s.diffuse_draws;
+        let (du, dv) = (&mut du[..m], &mut dv[..m]);
+        if m == j {
+            // Every survivor scatters diffusely (survivor i is in slot i): no gather.
+            for ((rng, u), v) in rngs[..m].iter_mut().zip(&mut *du).zip(&mut *dv) {
+                *u = uniform_f32(rng);
+                *v = uniform_f32(rng);
+            }
+            let (dx, dy, dz) = (&mut rays.dx[..m], &mut rays.dy[..m], &mut rays.dz[..m]);
+            let (sx, sy, sz) = (&sx[..m], &sy[..m], &sz[..m]);
+            for i in 0..m {
+                let d = cosine_from_square(du[i], dv[i], Vec3::new(sx[i], sy[i], sz[i]));
+                (dx[i], dy[i], dz[i]) = (d.x, d.y, d.z);
+            }
+        } else {
+            let [ex, ey, ez] = &mut s.diffuse_dir;
+            let (ex, ey, ez) = (&mut ex[..m], &mut ey[..m], &mut ez[..m]);
+            for (i, &slot) in s.diffuse_slot[..m].iter().enumerate() {
+                let slot = slot as usize;
+                let rng = &mut rngs[slot];
+                du[i] = uniform_f32(rng);
+                dv[i] = uniform_f32(rng);
+                // The normal, gathered here, where the map's loop reads it.
+                (ex[i], ey[i], ez[i]) = (sx[slot], sy[slot], sz[slot]);
+            }
+            for i in 0..m {
+                let d = cosine_from_square(du[i], dv[i], Vec3::new(ex[i], ey[i], ez[i]));
+                (ex[i], ey[i], ez[i]) = (d.x, d.y, d.z);
+            }
+            for (i, &slot) in s.diffuse_slot[..m].iter().enumerate() {
+                let slot = slot as usize;
+                (rays.dx[slot], rays.dy[slot], rays.dz[slot]) = (ex[i], ey[i], ez[i]);
+            }
+        }
         offset_origins(
             [&mut rays.ox[..j], &mut rays.oy[..j], &mut rays.oz[..j]],
             [&sx[..j], &sy[..j], &sz[..j]],
             self.scene_scale,
         );
-        // In f32 lanes (the directions go straight to the ray caster, which takes f32):
-        // each photon's two draws from its own stream, then the branch-free map, which
-        // vectorises, then the directions into their slots.
-        let m = diffuse;
-        let [du, dv] = &mut s.diffuse_draws;
-        let (du, dv) = (&mut du[..m], &mut dv[..m]);
-        for ((&slot, u), v) in s.diffuse_slot[..m].iter().zip(&mut *du).zip(&mut *dv) {
-            let rng = &mut rngs[slot as usize];
-            *u = uniform_f32(rng);
-            *v = uniform_f32(rng);
-        }
-        let [ex, ey, ez] = &mut s.diffuse_dir;
-        let (ex, ey, ez) = (&mut ex[..m], &mut ey[..m], &mut ez[..m]);
-        let [tx, ty, tz] = &s.diffuse_towards;
-        let (tx, ty, tz) = (&tx[..m], &ty[..m], &tz[..m]);
-        for i in 0..m {
-            let d = cosine_from_square(du[i], dv[i], Vec3::new(tx[i], ty[i], tz[i]));
-            (ex[i], ey[i], ez[i]) = (d.x, d.y, d.z);
-        }
-        for (i, &slot) in s.diffuse_slot[..m].iter().enumerate() {
-            let slot = slot as usize;
-            (rays.dx[slot], rays.dy[slot], rays.dz[slot]) = (ex[i], ey[i], ez[i]);
-        }
         rays.truncate(j);
         s.lanes.truncate(j);
+        s.lanes.bounces += 1;
         if !s.shadow_rays.is_empty() {
             self.caster.occluded(&s.shadow_rays, &mut s.occluded);
             tally.rays += s.shadow_rays.len() as u64;
