@@ -421,12 +421,15 @@ impl<'a> Tracer<'a> {
                 // lobe: the same draws (the direction's, in f32, in pass 3, into the
                 // hemisphere the photon arrived from). The slot is written whatever the
                 // roulette says and kept only if the photon survives.
-                let survives = (rngs[k].next_u32() as u64) < surfacing.survives_below;
+                // The stream is copied whole before its draw, not after: a 16-byte load
+                // of what the draw has just stored 8 bytes of would wait for the store.
+                let mut rng = rngs[k].clone();
+                let survives = (rng.next_u32() as u64) < surfacing.survives_below;
                 (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
                 (sx[j], sy[j], sz[j]) = (facing.x, facing.y, facing.z);
                 offsets[j] = offset;
                 segments[j] = Segment::Diffuse;
-                rngs[j] = rngs[k].clone();
+                rngs[j] = rng;
                 diffuse_slot[m] = j as u32;
                 let kept = survives as usize;
                 ended += !survives as u64;
@@ -434,7 +437,8 @@ impl<'a> Tracer<'a> {
                 m += kept;
                 continue;
             }
-            let Some(sample) = scatter(&surfacing.bsdf, dir, n_d, &mut rngs[k]) else {
+            let mut rng = rngs[k].clone();
+            let Some(sample) = scatter(&surfacing.bsdf, dir, n_d, &mut rng) else {
                 ended += 1;
                 continue;
             };
@@ -445,7 +449,7 @@ impl<'a> Tracer<'a> {
             (dx[j], dy[j], dz[j]) = (w.x, w.y, w.z);
             offsets[j] = offset;
             segments[j] = Segment::after(sample.kind, surfacing.glossy_connectable);
-            rngs[j] = rngs[k].clone();
+            rngs[j] = rng;
             j += 1;
         }
         tally.deposits.truncate(first_deposit + d);
