@@ -460,6 +460,74 @@ mod tests {
         }
     }
 
+    /// The f32 maps at the edges of their domain: every corner, edge and centre of
+    /// [0, 1]² (1 itself included, though `uniform_f32` stops at 1 − 2⁻²⁴), and the
+    /// points next to the rim of the disk (r → 1, where 1 − r² cancels): finite, unit
+    /// length to f32 rounding, in the right hemisphere.
+    #[test]
+    fn f32_maps_hold_at_the_domain_edges() {
+        let last = 1.0 - f32::EPSILON / 2.0; // the largest `uniform_f32`
+        let edge = [0.0, f32::EPSILON / 2.0, 0.25, 0.5, 0.75, last, 1.0];
+        let normals = [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+            Vec3::new(0.0, -1.0, 1e-7).normalize(),
+            Vec3::new(0.3, -0.5, 0.8).normalize(),
+        ];
+        for &u in &edge {
+            for &v in &edge {
+                let w = sphere_from_square(u, v);
+                assert!(w.is_finite(), "sphere ({u}, {v}) → {w}");
+                assert!((w.length() - 1.0).abs() < 1e-6, "sphere ({u}, {v}) → {w}");
+                assert!((-1.0..=1.0).contains(&w.z));
+                for n in normals {
+                    let d = cosine_from_square(u, v, n);
+                    assert!(d.is_finite(), "cosine ({u}, {v}) about {n} → {d}");
+                    assert!((d.length() - 1.0).abs() < 1e-6, "({u}, {v}) {n} → {d}");
+                    assert!(d.dot(n) >= -1e-6, "({u}, {v}) about {n} → {d}");
+                }
+            }
+        }
+        // The rim: |a| or |b| = 1 maps to r = 1 exactly, the sphere's south pole and the
+        // hemisphere's horizon; next to it, 1 − r² keeps its digits.
+        let w = sphere_from_square(0.0, 0.5);
+        assert_eq!(w.z, -1.0);
+        let d = cosine_from_square(1.0, 0.5, Vec3::Z);
+        assert_eq!(d.z, 0.0);
+        let near = sphere_from_square(last, 0.5);
+        let r = 2.0 * last - 1.0;
+        let exact = 2.0 * (1.0 - r as f64 * r as f64) - 1.0;
+        assert!((near.z as f64 - exact).abs() < 1e-6 * (1.0 + exact.abs()));
+        // The centre maps to the pole (the concentric map's 0/0 is guarded).
+        assert_eq!(concentric_f32(0.0, 0.0), (0.0, 0.0, 0.0));
+        assert_eq!(concentric(0.0, 0.0), (0.0, 0.0));
+        assert_eq!(cosine_from_square(0.5, 0.5, Vec3::Z), Vec3::Z);
+    }
+
+    /// The f32 cosine map's first moments about its normal: E[cos θ] = 2/3 and
+    /// E[cos² θ] = 1/2 for the density cos θ/π, within 5σ of their sampling error.
+    #[test]
+    fn f32_cosine_moments_follow_the_cosine_law() {
+        let n = Vec3::new(-0.2, 0.9, 0.4).normalize();
+        let mut rng = crate::rng::aux_stream(31);
+        let k = 200_000;
+        let (mut m1, mut m2) = (0.0, 0.0);
+        for _ in 0..k {
+            let (u, v) = (uniform_f32(&mut rng), uniform_f32(&mut rng));
+            let c = cosine_from_square(u, v, n).dot(n) as f64;
+            (m1, m2) = (m1 + c, m2 + c * c);
+        }
+        let (m1, m2) = (m1 / k as f64, m2 / k as f64);
+        // Var cos θ = 1/2 − 4/9 = 1/18; Var cos² θ = E[cos⁴] − 1/4 = 1/3 − 1/4 = 1/12.
+        let (s1, s2) = (
+            (1.0 / 18.0 / k as f64).sqrt(),
+            (1.0 / 12.0 / k as f64).sqrt(),
+        );
+        assert!((m1 - 2.0 / 3.0).abs() < 5.0 * s1, "E[cos] {m1}");
+        assert!((m2 - 0.5).abs() < 5.0 * s2, "E[cos²] {m2}");
+    }
+
     #[test]
     fn quarter_polynomials_match_the_library() {
         for k in -1000..=1000 {

@@ -679,6 +679,26 @@ mod tests {
     }
 
     #[test]
+    fn integer_roulette_is_the_float_comparison() {
+        // x < ⌈ρ·2³²⌉ ⇔ x·2⁻³² < ρ for every 32-bit x: checked at the threshold and its
+        // neighbours, for ρ at the ends, at powers of two and at odd values.
+        for rho in [0.0, 1e-12, 0.3, 0.5, 0.7, 0.95, 1.0 - 1e-12, 1.0] {
+            let t = survival_threshold(rho);
+            let mid = t.min(u32::MAX as u64) as i64;
+            for x in (mid - 3..=mid + 3).filter(|x| (0..=u32::MAX as i64).contains(x)) {
+                let float = x as f64 * (1.0 / 4_294_967_296.0) < rho;
+                assert_eq!((x as u64) < t, float, "ρ {rho}, x {x}");
+            }
+            assert_eq!(0 < t, rho > 0.0);
+        }
+        assert_eq!(
+            survival_threshold(1.0),
+            1 << 32,
+            "ρ = 1: every photon survives"
+        );
+    }
+
+    #[test]
     fn histories_fold_per_photon_and_cell() {
         // Photon 1 crosses cell 5 twice (one history score of 4) and cell 2 once.
         let mut pending = vec![(1, 5, 1.0), (0, 5, 2.0), (1, 5, 3.0), (1, 2, 4.0)];
