@@ -1,7 +1,7 @@
 //! Sampling of directions and points, shared by emission, scattering, receivers,
 //! photometry and the eye pass.
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use rand::RngCore;
 use rand_pcg::Pcg32;
 
@@ -12,17 +12,87 @@ pub fn uniform(rng: &mut Pcg32) -> f64 {
     rng.next_u32() as f64 * (1.0 / 4_294_967_296.0)
 }
 
-/// A point uniformly distributed in the unit disk, by rejection from the square (no
-/// trigonometry; 78.5 % of draws are accepted).
+/// A uniform random number in [0, 1) as an f32 from one 32-bit draw (24 bits kept):
+/// for directions handed to the ray caster, which takes f32 anyway.
 #[inline]
-fn unit_disk(rng: &mut Pcg32) -> (f64, f64) {
-    loop {
-        let x = 2.0 * uniform(rng) - 1.0;
-        let y = 2.0 * uniform(rng) - 1.0;
-        if x * x + y * y < 1.0 {
-            return (x, y);
-        }
-    }
+pub fn uniform_f32(rng: &mut Pcg32) -> f32 {
+    (rng.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+}
+
+/// cos θ and sin θ for |θ| ≤ π/4 by their Taylor polynomials (errors below 10⁻¹¹): no
+/// library call, no range reduction, no branch.
+#[inline(always)]
+fn cos_sin_quarter(t: f64) -> (f64, f64) {
+    let t2 = t * t;
+    let sin = t
+        * (1.0
+            + t2 * (-1.0 / 6.0
+                + t2 * (1.0 / 120.0
+                    + t2 * (-1.0 / 5040.0 + t2 * (1.0 / 362_880.0 - t2 / 39_916_800.0)))));
+    let cos = 1.0
+        + t2 * (-0.5
+            + t2 * (1.0 / 24.0
+                + t2 * (-1.0 / 720.0
+                    + t2 * (1.0 / 40_320.0 + t2 * (-1.0 / 3_628_800.0 + t2 / 479_001_600.0)))));
+    (cos, sin)
+}
+
+/// [`cos_sin_quarter`] in f32 (errors below 10⁻⁸, under f32's resolution).
+#[inline(always)]
+fn cos_sin_quarter_f32(t: f32) -> (f32, f32) {
+    let t2 = t * t;
+    let sin =
+        t * (1.0 + t2 * (-1.0 / 6.0 + t2 * (1.0 / 120.0 + t2 * (-1.0 / 5040.0 + t2 / 362_880.0))));
+    let cos = 1.0
+        + t2 * (-0.5
+            + t2 * (1.0 / 24.0 + t2 * (-1.0 / 720.0 + t2 * (1.0 / 40_320.0 - t2 / 3_628_800.0))));
+    (cos, sin)
+}
+
+/// The concentric map (Shirley and Chiu 1997) of the square [-1, 1]² onto the unit disk:
+/// area-preserving, so uniform (a, b) give a uniform point of the disk, in closed form
+/// (no rejection loop, whose unpredictable exit cost more than the arithmetic).
+#[inline(always)]
+fn concentric(a: f64, b: f64) -> (f64, f64) {
+    // Selects, not branches: which of |a|, |b| is larger is a coin toss.
+    let wide = a.abs() > b.abs();
+    let hi = if wide { a } else { b };
+    let lo = if wide { b } else { a };
+    let t = lo / if hi == 0.0 { 1.0 } else { hi };
+    let (c, s) = cos_sin_quarter(std::f64::consts::FRAC_PI_4 * t);
+    let (p, q) = (hi * c, hi * s);
+    (if wide { p } else { q }, if wide { q } else { p })
+}
+
+/// [`concentric`] in f32, with the radius: (x, y, r), r = √(x² + y²) exactly (|a| or
+/// |b|), so that 1 − r² can be formed as (1 − r)(1 + r) without cancellation.
+#[inline(always)]
+fn concentric_f32(a: f32, b: f32) -> (f32, f32, f32) {
+    // Selects, not branches: which of |a|, |b| is larger is a coin toss.
+    let wide = a.abs() > b.abs();
+    let hi = if wide { a } else { b };
+    let lo = if wide { b } else { a };
+    let t = lo / if hi == 0.0 { 1.0 } else { hi };
+    let (c, s) = cos_sin_quarter_f32(std::f32::consts::FRAC_PI_4 * t);
+    let (p, q) = (hi * c, hi * s);
+    (if wide { p } else { q }, if wide { q } else { p }, hi.abs())
+}
+
+/// A point uniformly distributed in the unit disk (two draws, concentric map).
+#[inline]
+pub fn unit_disk(rng: &mut Pcg32) -> (f64, f64) {
+    let a = 2.0 * uniform(rng) - 1.0;
+    let b = 2.0 * uniform(rng) - 1.0;
+    concentric(a, b)
+}
+
+/// [`unit_disk`] in f32.
+#[inline]
+pub fn unit_disk_f32(rng: &mut Pcg32) -> (f32, f32) {
+    let a = 2.0 * uniform_f32(rng) - 1.0;
+    let b = 2.0 * uniform_f32(rng) - 1.0;
+    let (x, y, _) = concentric_f32(a, b);
+    (x, y)
 }
 
 /// Two unit vectors completing `n` (unit) to an orthonormal basis (Duff et al. 2017).
@@ -37,13 +107,25 @@ pub fn basis(n: DVec3) -> (DVec3, DVec3) {
     )
 }
 
-/// A direction uniformly distributed over the unit sphere (Marsaglia 1972: from a
-/// uniform point of the unit disk, no trigonometry).
+/// [`basis`] in f32.
+#[inline(always)]
+pub fn basis_f32(n: Vec3) -> (Vec3, Vec3) {
+    let sign = 1.0_f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
+}
+
+/// A direction uniformly distributed over the unit sphere: a uniform point of the unit
+/// disk lifted by Marsaglia's (1972) equal-area map (z = 1 − 2r²), one square root.
 #[inline]
 pub fn uniform_sphere(rng: &mut Pcg32) -> DVec3 {
     let (x, y) = unit_disk(rng);
     let r2 = x * x + y * y;
-    let s = 2.0 * (1.0 - r2).sqrt();
+    let s = 2.0 * (1.0 - r2).max(0.0).sqrt();
     DVec3::new(x * s, y * s, 1.0 - 2.0 * r2)
 }
 
@@ -72,6 +154,39 @@ pub fn cosine_hemisphere(rng: &mut Pcg32, n: DVec3) -> DVec3 {
     (t * x + b * y + n * z).normalize()
 }
 
+/// [`cosine_hemisphere`] in f32, for directions that go straight to the ray caster
+/// (the same two draws as [`cosine_from_square`]).
+#[inline]
+pub fn cosine_hemisphere_f32(rng: &mut Pcg32, n: Vec3) -> Vec3 {
+    let u = uniform_f32(rng);
+    let v = uniform_f32(rng);
+    cosine_from_square(u, v, n)
+}
+
+/// The cosine-weighted direction about `n` (unit) at the point (u, v) of [0, 1)²: the
+/// concentric disk lifted to the hemisphere (Malley), in f32 and without a branch, so
+/// a loop over lanes vectorises. Its length is 1 to f32 rounding (a few 10⁻⁷): not
+/// normalised.
+#[inline(always)]
+pub fn cosine_from_square(u: f32, v: f32, n: Vec3) -> Vec3 {
+    let (x, y, r) = concentric_f32(2.0 * u - 1.0, 2.0 * v - 1.0);
+    let z = ((1.0 - r) * (1.0 + r)).sqrt();
+    let (t, b) = basis_f32(n);
+    t * x + b * y + n * z
+}
+
+/// The uniform direction of the sphere at the point (u, v) of [0, 1)²: the concentric
+/// disk lifted by Marsaglia's equal-area map, in f32 and without a branch (see
+/// [`cosine_from_square`]).
+#[inline(always)]
+pub fn sphere_from_square(u: f32, v: f32) -> Vec3 {
+    let (x, y, r) = concentric_f32(2.0 * u - 1.0, 2.0 * v - 1.0);
+    // 1 − r² without cancellation near the rim (the pole z = −1).
+    let one_minus_r2 = (1.0 - r) * (1.0 + r);
+    let s = 2.0 * one_minus_r2.sqrt();
+    Vec3::new(x * s, y * s, 2.0 * one_minus_r2 - 1.0)
+}
+
 /// The unit direction at polar angle acos(cos_t) and azimuth `phi` about `n`.
 #[inline]
 fn around(n: DVec3, cos_t: f64, phi: f64) -> DVec3 {
@@ -83,10 +198,9 @@ fn around(n: DVec3, cos_t: f64, phi: f64) -> DVec3 {
 /// A point uniformly distributed on the disk of `radius` about `center`, normal `n`.
 #[inline]
 pub fn uniform_disk(rng: &mut Pcg32, center: DVec3, n: DVec3, radius: f64) -> DVec3 {
-    let r = radius * uniform(rng).sqrt();
-    let phi = std::f64::consts::TAU * uniform(rng);
+    let (x, y) = unit_disk(rng);
     let (t, b) = basis(n);
-    center + t * (r * phi.cos()) + b * (r * phi.sin())
+    center + t * (radius * x) + b * (radius * y)
 }
 
 /// A rectangle (orthogonal edges `ex`, `ey` from `corner`) as seen from a point:
@@ -239,6 +353,197 @@ mod tests {
         // Var(cos) = 1/2 − 4/9 = 1/18 for the cosine-weighted distribution.
         let sigma = (1.0 / 18.0 / k as f64).sqrt();
         assert!((mean - 2.0 / 3.0).abs() < 4.0 * sigma, "mean cos {mean}");
+    }
+
+    /// Pearson's χ² of `k` points of [0, 1)² (each sampler's coordinates mapped so that
+    /// its exact density becomes uniform) over `m` × `m` equal cells, against its bound:
+    /// the mean (m² − 1) plus 5 of its standard deviations √(2(m² − 1)).
+    fn chi_square_is_uniform(k: usize, m: usize, mut point: impl FnMut() -> (f64, f64)) {
+        let mut counts = vec![0u32; m * m];
+        for _ in 0..k {
+            let (u, v) = point();
+            assert!(
+                (0.0..=1.0).contains(&u) && (0.0..=1.0).contains(&v),
+                "{u} {v}"
+            );
+            let (i, j) = (
+                ((u * m as f64) as usize).min(m - 1),
+                ((v * m as f64) as usize).min(m - 1),
+            );
+            counts[i * m + j] += 1;
+        }
+        let expected = k as f64 / (m * m) as f64;
+        let chi2: f64 = (counts.iter())
+            .map(|&c| (c as f64 - expected).powi(2) / expected)
+            .sum();
+        let dof = (m * m - 1) as f64;
+        assert!(
+            chi2 < dof + 5.0 * (2.0 * dof).sqrt(),
+            "χ² {chi2} for {dof} dof"
+        );
+    }
+
+    /// The azimuth of (x, y) as a fraction of a turn, in [0, 1].
+    fn turn(x: f64, y: f64) -> f64 {
+        y.atan2(x) / std::f64::consts::TAU + 0.5
+    }
+
+    #[test]
+    fn unit_disk_density_is_uniform() {
+        // Uniform in the disk ⇔ r² and the azimuth uniform and independent.
+        let mut rng = crate::rng::aux_stream(21);
+        chi_square_is_uniform(400_000, 16, || {
+            let (x, y) = unit_disk(&mut rng);
+            (x * x + y * y, turn(x, y))
+        });
+        let mut rng = crate::rng::aux_stream(22);
+        chi_square_is_uniform(400_000, 16, || {
+            let (x, y) = unit_disk_f32(&mut rng);
+            let (x, y) = (x as f64, y as f64);
+            (x * x + y * y, turn(x, y))
+        });
+    }
+
+    #[test]
+    fn uniform_disk_density_is_uniform() {
+        let mut rng = crate::rng::aux_stream(23);
+        let (c, n) = (DVec3::new(1.0, -2.0, 3.0), DVec3::new(-0.6, 0.0, 0.8));
+        let (t, b) = basis(n);
+        chi_square_is_uniform(200_000, 12, || {
+            let d = (uniform_disk(&mut rng, c, n, 2.5) - c) / 2.5;
+            assert!(d.dot(n).abs() < 1e-12);
+            let (x, y) = (d.dot(t), d.dot(b));
+            (x * x + y * y, turn(x, y))
+        });
+    }
+
+    #[test]
+    fn uniform_sphere_density_is_uniform() {
+        // Uniform on the sphere ⇔ z and the azimuth uniform and independent.
+        let mut rng = crate::rng::aux_stream(24);
+        chi_square_is_uniform(400_000, 16, || {
+            let d = uniform_sphere(&mut rng);
+            assert!((d.length() - 1.0).abs() < 1e-12);
+            ((d.z + 1.0) / 2.0, turn(d.x, d.y))
+        });
+        let mut rng = crate::rng::aux_stream(29);
+        chi_square_is_uniform(400_000, 16, || {
+            let (u, v) = (uniform_f32(&mut rng), uniform_f32(&mut rng));
+            let d = sphere_from_square(u, v).as_dvec3();
+            assert!((d.length() - 1.0).abs() < 1e-6);
+            (((d.z + 1.0) / 2.0).clamp(0.0, 1.0), turn(d.x, d.y))
+        });
+    }
+
+    #[test]
+    fn cosine_hemisphere_density_is_cosine() {
+        // Density cos θ / π ⇔ sin²θ and the azimuth about n uniform and independent.
+        let n = DVec3::new(0.3, -0.5, 0.8).normalize();
+        let (t, b) = basis(n);
+        let mut rng = crate::rng::aux_stream(25);
+        chi_square_is_uniform(400_000, 16, || {
+            let d = cosine_hemisphere(&mut rng, n);
+            assert!((d.length() - 1.0).abs() < 1e-12 && d.dot(n) >= 0.0);
+            let (x, y) = (d.dot(t), d.dot(b));
+            (x * x + y * y, turn(x, y))
+        });
+        for (seed, n) in [(26, n), (27, DVec3::new(0.0, 0.0, -1.0)), (28, DVec3::X)] {
+            let n32 = n.as_vec3();
+            let (t, b) = basis(n);
+            let mut rng = crate::rng::aux_stream(seed);
+            chi_square_is_uniform(400_000, 16, || {
+                let d = cosine_hemisphere_f32(&mut rng, n32).as_dvec3();
+                assert!((d.length() - 1.0).abs() < 1e-6 && d.dot(n) >= -1e-7);
+                let (x, y) = (d.dot(t), d.dot(b));
+                ((x * x + y * y).min(1.0), turn(x, y))
+            });
+        }
+    }
+
+    /// The f32 maps at the edges of their domain: every corner, edge and centre of
+    /// [0, 1]² (1 itself included, though `uniform_f32` stops at 1 − 2⁻²⁴), and the
+    /// points next to the rim of the disk (r → 1, where 1 − r² cancels): finite, unit
+    /// length to f32 rounding, in the right hemisphere.
+    #[test]
+    fn f32_maps_hold_at_the_domain_edges() {
+        let last = 1.0 - f32::EPSILON / 2.0; // the largest `uniform_f32`
+        let edge = [0.0, f32::EPSILON / 2.0, 0.25, 0.5, 0.75, last, 1.0];
+        let normals = [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+            Vec3::new(0.0, -1.0, 1e-7).normalize(),
+            Vec3::new(0.3, -0.5, 0.8).normalize(),
+        ];
+        for &u in &edge {
+            for &v in &edge {
+                let w = sphere_from_square(u, v);
+                assert!(w.is_finite(), "sphere ({u}, {v}) → {w}");
+                assert!((w.length() - 1.0).abs() < 1e-6, "sphere ({u}, {v}) → {w}");
+                assert!((-1.0..=1.0).contains(&w.z));
+                for n in normals {
+                    let d = cosine_from_square(u, v, n);
+                    assert!(d.is_finite(), "cosine ({u}, {v}) about {n} → {d}");
+                    assert!((d.length() - 1.0).abs() < 1e-6, "({u}, {v}) {n} → {d}");
+                    assert!(d.dot(n) >= -1e-6, "({u}, {v}) about {n} → {d}");
+                }
+            }
+        }
+        // The rim: |a| or |b| = 1 maps to r = 1 exactly, the sphere's south pole and the
+        // hemisphere's horizon; next to it, 1 − r² keeps its digits.
+        let w = sphere_from_square(0.0, 0.5);
+        assert_eq!(w.z, -1.0);
+        let d = cosine_from_square(1.0, 0.5, Vec3::Z);
+        assert_eq!(d.z, 0.0);
+        let near = sphere_from_square(last, 0.5);
+        let r = 2.0 * last - 1.0;
+        let exact = 2.0 * (1.0 - r as f64 * r as f64) - 1.0;
+        assert!((near.z as f64 - exact).abs() < 1e-6 * (1.0 + exact.abs()));
+        // The centre maps to the pole (the concentric map's 0/0 is guarded).
+        assert_eq!(concentric_f32(0.0, 0.0), (0.0, 0.0, 0.0));
+        assert_eq!(concentric(0.0, 0.0), (0.0, 0.0));
+        assert_eq!(cosine_from_square(0.5, 0.5, Vec3::Z), Vec3::Z);
+    }
+
+    /// The f32 cosine map's first moments about its normal: E[cos θ] = 2/3 and
+    /// E[cos² θ] = 1/2 for the density cos θ/π, within 5σ of their sampling error.
+    #[test]
+    fn f32_cosine_moments_follow_the_cosine_law() {
+        let n = Vec3::new(-0.2, 0.9, 0.4).normalize();
+        let mut rng = crate::rng::aux_stream(31);
+        let k = 200_000;
+        let (mut m1, mut m2) = (0.0, 0.0);
+        for _ in 0..k {
+            let (u, v) = (uniform_f32(&mut rng), uniform_f32(&mut rng));
+            let c = cosine_from_square(u, v, n).dot(n) as f64;
+            (m1, m2) = (m1 + c, m2 + c * c);
+        }
+        let (m1, m2) = (m1 / k as f64, m2 / k as f64);
+        // Var cos θ = 1/2 − 4/9 = 1/18; Var cos² θ = E[cos⁴] − 1/4 = 1/3 − 1/4 = 1/12.
+        let (s1, s2) = (
+            (1.0 / 18.0 / k as f64).sqrt(),
+            (1.0 / 12.0 / k as f64).sqrt(),
+        );
+        assert!((m1 - 2.0 / 3.0).abs() < 5.0 * s1, "E[cos] {m1}");
+        assert!((m2 - 0.5).abs() < 5.0 * s2, "E[cos²] {m2}");
+    }
+
+    #[test]
+    fn quarter_polynomials_match_the_library() {
+        for k in -1000..=1000 {
+            let t = std::f64::consts::FRAC_PI_4 * k as f64 / 1000.0;
+            let (c, s) = cos_sin_quarter(t);
+            assert!(
+                (c - t.cos()).abs() < 1e-11 && (s - t.sin()).abs() < 1e-11,
+                "{t}"
+            );
+            let (c, s) = cos_sin_quarter_f32(t as f32);
+            let (c, s) = (c as f64, s as f64);
+            assert!(
+                (c - t.cos()).abs() < 3e-7 && (s - t.sin()).abs() < 3e-7,
+                "{t}"
+            );
+        }
     }
 
     #[test]

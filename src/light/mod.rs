@@ -85,6 +85,20 @@ pub trait Emitter: Debug + Send + Sync {
     /// density (the flux weight is Φ_total / N, shared by every photon).
     fn sample_emission(&self, rng: &mut Pcg32) -> (DVec3, DVec3);
 
+    /// [`Emitter::sample_emission`] for a batch of photons, photon k from `rngs[k]`,
+    /// written as f32 origins `o` and directions `d` (what the ray caster takes). A
+    /// source whose sampling vectorises draws its numbers in one loop and maps them in
+    /// another; by default, photon by photon.
+    fn sample_emission_lanes(&self, rngs: &mut [Pcg32], o: [&mut [f32]; 3], d: [&mut [f32]; 3]) {
+        let ([ox, oy, oz], [dx, dy, dz]) = (o, d);
+        for (k, rng) in rngs.iter_mut().enumerate() {
+            let (p, w) = self.sample_emission(rng);
+            let (p, w) = (p.as_vec3(), w.as_vec3());
+            (ox[k], oy[k], oz[k]) = (p.x, p.y, p.z);
+            (dx[k], dy[k], dz[k]) = (w.x, w.y, w.z);
+        }
+    }
+
     /// The light arriving at local point `p` (method.md eqs. 1–2), piece by piece: one
     /// piece for a point-like or directional source; for a source with an extent one per
     /// point of `area_pattern` ([0, 1)² coordinates), each an equal share of the source.

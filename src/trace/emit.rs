@@ -59,11 +59,36 @@ impl Emitters {
     #[inline]
     pub fn light_of(&self, index: u64) -> usize {
         const GOLDEN: f64 = 0.618_033_988_749_894_8;
+        if self.cdf.len() < 2 {
+            return 0;
+        }
         let x = (index as f64 * GOLDEN).fract();
         self.cdf
             .iter()
             .position(|&c| x < c)
             .unwrap_or(self.cdf.len().saturating_sub(1))
+    }
+
+    /// Origins and directions (f32, for the ray caster) of the photons `first`,
+    /// `first + 1`, … drawn from `rngs` (one stream each): in lanes when one light emits
+    /// them all ([`Emitter::sample_emission_lanes`]), else photon by photon.
+    pub fn sample_lanes(
+        &self,
+        first: u64,
+        rngs: &mut [Pcg32],
+        o: [&mut [f32]; 3],
+        d: [&mut [f32]; 3],
+    ) {
+        if let [emitter] = &self.emitters[..] {
+            return emitter.sample_emission_lanes(rngs, o, d);
+        }
+        let ([ox, oy, oz], [dx, dy, dz]) = (o, d);
+        for (k, rng) in rngs.iter_mut().enumerate() {
+            let (p, w) = self.sample(self.light_of(first + k as u64), rng);
+            let (p, w) = (p.as_vec3(), w.as_vec3());
+            (ox[k], oy[k], oz[k]) = (p.x, p.y, p.z);
+            (dx[k], dy[k], dz[k]) = (w.x, w.y, w.z);
+        }
     }
 
     /// Samples the origin and unit direction of a photon of light `light`.

@@ -21,13 +21,14 @@ pub mod scatter;
 
 use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng::photon_stream;
-use crate::sampling::{cosine_hemisphere, uniform};
+use crate::sampling::{cosine_from_square, uniform_f32};
 use crate::scene::{Estimator, Geometry, Scene};
-use crate::tally::{CellPartial, ChunkTally, ReceiverGrid, Tallies};
+use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid, Tallies};
 use bsdf::{Bsdf, LobeKind, Transport};
 use direct::DirectLight;
 use emit::Emitters;
 use glam::{DVec3, Vec3};
+use rand::RngCore;
 use rand_pcg::Pcg32;
 use scatter::{offset_origin, offset_origins, scatter};
 
@@ -85,8 +86,12 @@ pub struct Scratch {
     shadow_rays: RayBatch,
     shadow_scores: Vec<(u32, u32, f64)>,
     occluded: Vec<bool>,
-    /// Diffuse survivors of a bounce, whose directions are sampled in a pass of their own.
-    diffuse: Vec<DiffuseSlot>,
+    /// Diffuse survivors of a bounce, whose directions are sampled in a pass of their
+    /// own (f32 lanes): their slots in the batch (each scatters into the hemisphere of
+    /// its `side`), their two random numbers and their new directions.
+    diffuse_slot: Vec<u32>,
+    diffuse_draws: [Vec<f32>; 2],
+    diffuse_dir: [Vec<f32>; 3],
     /// Which segments of the batch cross the receiver being scored.
     marks: Vec<bool>,
     /// Per survivor, the normal of the side it leaves its surface on.
@@ -96,25 +101,18 @@ pub struct Scratch {
 impl Scratch {
     /// Sizes the per-bounce arrays of pass 2 and 3 for `n` lanes.
     fn size_bounce_arrays(&mut self, n: usize) {
-        if self.diffuse.len() < n {
-            self.diffuse.resize(n, DiffuseSlot::default());
+        if self.diffuse_slot.len() < n {
+            self.diffuse_slot.resize(n, 0);
         }
-        for v in &mut self.side {
+        for v in (self.side.iter_mut())
+            .chain(&mut self.diffuse_draws)
+            .chain(&mut self.diffuse_dir)
+        {
             if v.len() < n {
                 v.resize(n, 0.0);
             }
         }
     }
-}
-
-/// A diffuse survivor: its slot in the batch and the hemisphere it scatters into, the
-/// hit triangle's normal (f32, as stored) or its opposite.
-#[derive(Clone, Copy, Debug, Default)]
-struct DiffuseSlot {
-    slot: u32,
-    /// Scatter to the side opposite `normal`.
-    flip: bool,
-    normal: Vec3,
 }
 
 /// Where a photon's current segment started.
@@ -152,8 +150,10 @@ impl Segment {
 struct Lanes {
     /// Photon index within the chunk.
     offset: Vec<u32>,
-    /// Surface hits so far (the first is direct light, the rest indirect).
-    bounces: Vec<u32>,
+    /// Surface hits so far (the first is direct light, the rest indirect): the same for
+    /// every live photon, since all start together and each bounce ends or advances
+    /// every one of them.
+    bounces: u32,
     /// Where the current segment started.
     segment: Vec<Segment>,
     rng: Vec<Pcg32>,
@@ -162,7 +162,6 @@ struct Lanes {
 impl Lanes {
     fn truncate(&mut self, n: usize) {
         self.offset.truncate(n);
-        self.bounces.truncate(n);
         self.segment.truncate(n);
         self.rng.truncate(n);
     }
@@ -181,6 +180,9 @@ struct Surfacing {
     /// Diffuse reflection is its only lobe: the roulette is one comparison with ρ
     /// (the same number [`Bsdf::sample`] draws and compares, so the same path).
     lambert_only: bool,
+    /// A photon survives that roulette when its 32-bit draw x is below this:
+    /// x < ⌈ρ·2³²⌉ ⇔ x·2⁻³² < ρ, [`crate::sampling::uniform`]'s comparison, in integers.
+    survives_below: u64,
 }
 
 impl Surfacing {
@@ -189,9 +191,16 @@ impl Surfacing {
             connectable: bsdf.connectable(),
             glossy_connectable: bsdf.glossy_connectable(),
             lambert_only: bsdf.lambert_only(),
+            survives_below: survival_threshold(bsdf.diffuse().0),
             bsdf,
         }
     }
+}
+
+/// ⌈ρ·2³²⌉: for every 32-bit x, x < it exactly when x·2⁻³² < ρ (both sides exact in
+/// f64: ρ·2³² is ρ scaled by a power of two, x·2⁻³² a 32-bit integer scaled).
+fn survival_threshold(rho: f64) -> u64 {
+    (rho.clamp(0.0, 1.0) * 4_294_967_296.0).ceil() as u64
 }
 
 impl<'a> Tracer<'a> {
@@ -279,23 +288,19 @@ impl<'a> Tracer<'a> {
         rays.reset_closest_hit(live);
         let lanes = &mut scratch.lanes;
         lanes.truncate(0);
-        lanes.bounces.resize(live, 0);
+        lanes.bounces = 0;
         lanes.segment.resize(live, Segment::Emitted);
         scratch.pending.clear();
         // Streams first, then emission: two short loops whose iterations overlap.
-        for offset in 0..live as u32 {
-            lanes.offset.push(offset);
-            lanes
-                .rng
-                .push(photon_stream(self.seed, first + offset as u64));
-        }
-        for (k, rng) in lanes.rng.iter_mut().enumerate() {
-            let index = first + k as u64;
-            let (o, d) = self.emitters.sample(self.emitters.light_of(index), rng);
-            let (o, d) = (o.as_vec3(), d.as_vec3());
-            (rays.ox[k], rays.oy[k], rays.oz[k]) = (o.x, o.y, o.z);
-            (rays.dx[k], rays.dy[k], rays.dz[k]) = (d.x, d.y, d.z);
-        }
+        lanes.offset.extend(0..live as u32);
+        let seed = self.seed;
+        (lanes.rng).extend((0..live as u64).map(|offset| photon_stream(seed, first + offset)));
+        self.emitters.sample_lanes(
+            first,
+            &mut lanes.rng,
+            [&mut rays.ox, &mut rays.oy, &mut rays.oz],
+            [&mut rays.dx, &mut rays.dy, &mut rays.dz],
+        );
         // The parity of a photon's index is that of its chunk offset, flipped when the
         // chunk starts at an odd index.
         let odd_first = first % 2 == 1;
@@ -311,11 +316,12 @@ impl<'a> Tracer<'a> {
         );
     }
 
-    /// One bounce of every live photon, in three passes over the batch, each a short
-    /// loop the processor overlaps from lane to lane: score the receivers the segments
-    /// cross; then deposit, connect and play the roulette at each hit, compacting the
-    /// survivors in place (lane order kept); then sample the diffuse survivors' new
-    /// directions. Each photon draws its random numbers in the same order as ever.
+    /// One bounce of every live photon, in short passes over the batch, each a loop the
+    /// processor overlaps from lane to lane: score the receivers the segments cross;
+    /// look up the surfaces hit; then deposit, connect and play the roulette at each
+    /// hit, compacting the survivors in place (lane order kept); then sample the diffuse
+    /// survivors' new directions. Each photon draws its random numbers in the same order
+    /// as ever.
     fn step(&self, s: &mut Scratch, tally: &mut ChunkTally, flux: f64, odd_first: bool) {
         s.shadow_rays.clear();
         s.shadow_scores.clear();
@@ -339,7 +345,7 @@ impl<'a> Tracer<'a> {
 
     /// Pass 2 of [`Self::step`]: deposit, connect and play the roulette at each hit,
     /// compacting the survivors in place. Returns how many survive and how many of them
-    /// scatter diffusely (their slots in `s.diffuse`).
+    /// scatter diffusely (their slots in `s.diffuse_slot`).
     fn hits_pass(
         &self,
         s: &mut Scratch,
@@ -350,21 +356,32 @@ impl<'a> Tracer<'a> {
         let (n, hits, rays, lanes) = (s.rays.len(), &s.hits, &mut s.rays, &mut s.lanes);
         let (ox, oy, oz) = (&mut rays.ox[..n], &mut rays.oy[..n], &mut rays.oz[..n]);
         let (dx, dy, dz) = (&mut rays.dx[..n], &mut rays.dy[..n], &mut rays.dz[..n]);
-        let (offsets, bounces) = (&mut lanes.offset[..n], &mut lanes.bounces[..n]);
-        let (segments, rngs) = (&mut lanes.segment[..n], &mut lanes.rng[..n]);
+        let (offsets, segments) = (&mut lanes.offset[..n], &mut lanes.segment[..n]);
+        let rngs = &mut lanes.rng[..n];
+        // Every live photon has hit as often: the first hit is direct light.
+        let hit_bounces = lanes.bounces;
+        let (indirect, capped) = (hit_bounces > 0, hit_bounces >= self.max_bounces);
+        // Deposits are written for every hit and kept by advancing `d` where the
+        // triangle holds a map: no branch.
+        let first_deposit = tally.deposits.len();
+        tally.deposits.resize(first_deposit + n, 0);
+        let deposits = &mut tally.deposits[first_deposit..];
+        let mut d = 0;
         // Diffuse survivors whose direction pass 3 samples. Written for every
         // Lambertian hit and kept by advancing `m`, so the roulette is no branch.
-        let diffuse = &mut s.diffuse[..n];
+        let diffuse_slot = &mut s.diffuse_slot[..n];
         let mut m = 0;
         // Survivors leave their hit points along these normals (pass 3).
         let [sx, sy, sz] = &mut s.side;
         let (sx, sy, sz) = (&mut sx[..n], &mut sy[..n], &mut sz[..n]);
+        // Histories that end here: rays that left the scene after `hit_bounces` hits,
+        // photons absorbed (or stopped by the bounce cap) at this hit.
+        let (mut escaped, mut ended) = (0u64, 0u64);
         // Survivors so far: lane k's successor is written at j ≤ k.
         let mut j = 0;
         for k in 0..n {
-            let hit_bounces = bounces[k];
             let Some(surface) = hits.surface(k, self.geometry) else {
-                tally.record_history_hits(hit_bounces);
+                escaped += 1;
                 continue;
             };
             let dir = DVec3::new(dx[k] as f64, dy[k] as f64, dz[k] as f64);
@@ -374,10 +391,11 @@ impl<'a> Tracer<'a> {
             let cos_in = dir.dot(n_d);
             let back_face = cos_in > 0.0;
             // Unmapped (instanced) objects scatter and occlude but hold no tallies.
-            if let Some(tri) = surface.mapped {
-                let odd = (offset % 2 == 1) != odd_first;
-                tally.deposit(tri, back_face, hit_bounces > 0, odd);
-            }
+            let (tri, has_map) = (surface.mapped.unwrap_or(0), surface.mapped.is_some());
+            let odd = (offset % 2 == 1) != odd_first;
+            let code_tri = tri;
+            deposits[d] = deposit_code(code_tri, back_face, indirect, odd);
+            d += has_map as usize;
             let p = surface.point;
             let facing = if back_face { -normal } else { normal };
             let surfacing = &self.surfacings[surface.material as usize];
@@ -393,48 +411,50 @@ impl<'a> Tracer<'a> {
                     &mut s.shadow_scores,
                 );
             }
-            if hit_bounces >= self.max_bounces {
+            if capped {
                 tally.killed_by_bounce_cap += 1;
-                tally.record_history_hits(hit_bounces + 1);
+                ended += 1;
                 continue;
             }
             if surfacing.lambert_only {
                 // `Bsdf::sample`'s roulette and diffuse lobe for a material with no other
-                // lobe: the same draws, the same numbers. The slot is written whatever
-                // the roulette says and kept only if the photon survives.
-                let survives = uniform(&mut rngs[k]) < surfacing.bsdf.diffuse().0;
+                // lobe: the same draws (the direction's, in f32, in pass 3, into the
+                // hemisphere the photon arrived from). The slot is written whatever the
+                // roulette says and kept only if the photon survives.
+                // The stream is copied whole before its draw, not after: a 16-byte load
+                // of what the draw has just stored 8 bytes of would wait for the store.
+                let mut rng = rngs[k].clone();
+                let survives = (rng.next_u32() as u64) < surfacing.survives_below;
                 (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
                 (sx[j], sy[j], sz[j]) = (facing.x, facing.y, facing.z);
                 offsets[j] = offset;
-                bounces[j] = hit_bounces + 1;
                 segments[j] = Segment::Diffuse;
-                rngs[j] = rngs[k].clone();
-                diffuse[m] = DiffuseSlot {
-                    slot: j as u32,
-                    flip: !(cos_in < 0.0),
-                    normal,
-                };
-                let (kept, ended) = (survives as usize, !survives as u64);
-                tally.record_histories(hit_bounces + 1, ended);
+                rngs[j] = rng;
+                diffuse_slot[m] = j as u32;
+                let kept = survives as usize;
+                ended += !survives as u64;
                 j += kept;
                 m += kept;
                 continue;
             }
-            let Some(sample) = scatter(&surfacing.bsdf, dir, n_d, &mut rngs[k]) else {
-                tally.record_history_hits(hit_bounces + 1);
+            let mut rng = rngs[k].clone();
+            let Some(sample) = scatter(&surfacing.bsdf, dir, n_d, &mut rng) else {
+                ended += 1;
                 continue;
             };
             let side = if sample.transmitted { -facing } else { facing };
-            let d = sample.dir.as_vec3();
+            let w = sample.dir.as_vec3();
             (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
             (sx[j], sy[j], sz[j]) = (side.x, side.y, side.z);
-            (dx[j], dy[j], dz[j]) = (d.x, d.y, d.z);
+            (dx[j], dy[j], dz[j]) = (w.x, w.y, w.z);
             offsets[j] = offset;
-            bounces[j] = hit_bounces + 1;
             segments[j] = Segment::after(sample.kind, surfacing.glossy_connectable);
-            rngs[j] = rngs[k].clone();
+            rngs[j] = rng;
             j += 1;
         }
+        tally.deposits.truncate(first_deposit + d);
+        tally.record_histories(hit_bounces, escaped);
+        tally.record_histories(hit_bounces + 1, ended);
         (j, m)
     }
 
@@ -451,20 +471,53 @@ impl<'a> Tracer<'a> {
         let rays = &mut s.rays;
         let [sx, sy, sz] = &s.side;
         let rngs = &mut s.lanes.rng;
+        // In f32 lanes (the directions go straight to the ray caster, which takes f32):
+        // each photon's two draws from its own stream, then the branch-free map about
+        // the normal of the side it leaves on, which vectorises, then the directions
+        // into their slots.
+        let m = diffuse;
+        let [du, dv] = &mut s.diffuse_draws;
+        let (du, dv) = (&mut du[..m], &mut dv[..m]);
+        if m == j {
+            // Every survivor scatters diffusely (survivor i is in slot i): no gather.
+            for ((rng, u), v) in rngs[..m].iter_mut().zip(&mut *du).zip(&mut *dv) {
+                *u = uniform_f32(rng);
+                *v = uniform_f32(rng);
+            }
+            let (dx, dy, dz) = (&mut rays.dx[..m], &mut rays.dy[..m], &mut rays.dz[..m]);
+            let (sx, sy, sz) = (&sx[..m], &sy[..m], &sz[..m]);
+            for i in 0..m {
+                let d = cosine_from_square(du[i], dv[i], Vec3::new(sx[i], sy[i], sz[i]));
+                (dx[i], dy[i], dz[i]) = (d.x, d.y, d.z);
+            }
+        } else {
+            let [ex, ey, ez] = &mut s.diffuse_dir;
+            let (ex, ey, ez) = (&mut ex[..m], &mut ey[..m], &mut ez[..m]);
+            for (i, &slot) in s.diffuse_slot[..m].iter().enumerate() {
+                let slot = slot as usize;
+                let rng = &mut rngs[slot];
+                du[i] = uniform_f32(rng);
+                dv[i] = uniform_f32(rng);
+                // The normal, gathered here, where the map's loop reads it.
+                (ex[i], ey[i], ez[i]) = (sx[slot], sy[slot], sz[slot]);
+            }
+            for i in 0..m {
+                let d = cosine_from_square(du[i], dv[i], Vec3::new(ex[i], ey[i], ez[i]));
+                (ex[i], ey[i], ez[i]) = (d.x, d.y, d.z);
+            }
+            for (i, &slot) in s.diffuse_slot[..m].iter().enumerate() {
+                let slot = slot as usize;
+                (rays.dx[slot], rays.dy[slot], rays.dz[slot]) = (ex[i], ey[i], ez[i]);
+            }
+        }
         offset_origins(
             [&mut rays.ox[..j], &mut rays.oy[..j], &mut rays.oz[..j]],
             [&sx[..j], &sy[..j], &sz[..j]],
             self.scene_scale,
         );
-        for &DiffuseSlot { slot, flip, normal } in &s.diffuse[..diffuse] {
-            let slot = slot as usize;
-            let n_d = normal.as_dvec3();
-            let towards = if flip { -n_d } else { n_d };
-            let d = cosine_hemisphere(&mut rngs[slot], towards).as_vec3();
-            (rays.dx[slot], rays.dy[slot], rays.dz[slot]) = (d.x, d.y, d.z);
-        }
         rays.truncate(j);
         s.lanes.truncate(j);
+        s.lanes.bounces += 1;
         if !s.shadow_rays.is_empty() {
             self.caster.occluded(&s.shadow_rays, &mut s.occluded);
             tally.rays += s.shadow_rays.len() as u64;
@@ -623,6 +676,26 @@ mod tests {
         assert!(0.95f64.powi(bounce_cap(0.95) as i32) < 1e-12);
         assert_eq!(bounce_cap(0.0), 64);
         assert_eq!(bounce_cap(1.0), MAX_BOUNCES_LOSSLESS);
+    }
+
+    #[test]
+    fn integer_roulette_is_the_float_comparison() {
+        // x < ⌈ρ·2³²⌉ ⇔ x·2⁻³² < ρ for every 32-bit x: checked at the threshold and its
+        // neighbours, for ρ at the ends, at powers of two and at odd values.
+        for rho in [0.0, 1e-12, 0.3, 0.5, 0.7, 0.95, 1.0 - 1e-12, 1.0] {
+            let t = survival_threshold(rho);
+            let mid = t.min(u32::MAX as u64) as i64;
+            for x in (mid - 3..=mid + 3).filter(|x| (0..=u32::MAX as i64).contains(x)) {
+                let float = x as f64 * (1.0 / 4_294_967_296.0) < rho;
+                assert_eq!((x as u64) < t, float, "ρ {rho}, x {x}");
+            }
+            assert_eq!(0 < t, rho > 0.0);
+        }
+        assert_eq!(
+            survival_threshold(1.0),
+            1 << 32,
+            "ρ = 1: every photon survives"
+        );
     }
 
     #[test]
