@@ -319,3 +319,50 @@ mod parity {
         far_from_origin(|g| Box::new(ObvhsScene::new(g)));
     }
 }
+
+/// A square of side `side_m` (two triangles) hit head-on at a point off its diagonal:
+/// the hit normal each backend reports.
+fn normal_of_square(backend: luxtally::accel::Backend, side_m: f64) -> [f32; 3] {
+    let text = format!(
+        "[materials.m]\nreflectance = 0.5\n[[objects]]\nshape = \"rect\"\n\
+         corner = [0, 0, 0]\nu = [{side_m:e}, 0, 0]\nv = [0, {side_m:e}, 0]\nmaterial = \"m\"\n\
+         [[lights]]\ntype = \"point\"\nposition = [0, 0, 1]\nintensity_cd = 1\n"
+    );
+    let scene = luxtally::scene::load_str(&text, std::path::Path::new("."), "square.toml")
+        .expect("square loads");
+    let caster = luxtally::accel::build(backend, &scene.geometry).expect("backend builds");
+    // The local frame is centred on the square; the ray starts at least 1 m above it
+    // (obvhs loses hits closer than ~10⁻⁹ m to the ray's origin, see accel/bvh.rs).
+    let s = side_m as f32;
+    let mut rays = RayBatch::default();
+    rays.push(
+        [0.1 * s, 0.2 * s, s.max(1.0)],
+        [0.0, 0.0, -1.0],
+        0.0,
+        f32::INFINITY,
+    );
+    let mut hits = HitBatch::default();
+    caster.intersect_with(caster.default_intersect_api(), &rays, &mut hits);
+    assert_ne!(hits.tri[0], NO_HIT, "side {side_m} m: the ray misses");
+    [hits.ngx[0], hits.ngy[0], hits.ngz[0]]
+}
+
+#[test]
+fn hit_normals_are_unit_for_tiny_and_huge_triangles() {
+    let mut backends = vec![luxtally::accel::Backend::Embree];
+    if cfg!(feature = "obvhs") {
+        backends.push(luxtally::accel::Backend::Obvhs);
+    }
+    for backend in backends {
+        // Edges of 10⁻¹² m and 10¹² m: Embree's unnormalised normal has a squared length
+        // below f32's smallest subnormal, or above f32's largest value.
+        for side_m in [1e-12, 1e-3, 1.0, 1e12] {
+            let n = normal_of_square(backend, side_m);
+            let length = n.iter().map(|c| c * c).sum::<f32>().sqrt();
+            assert!(
+                (length - 1.0).abs() < 1e-6 && n[2].abs() > 0.999_999,
+                "{backend:?}, side {side_m} m: normal {n:?}"
+            );
+        }
+    }
+}

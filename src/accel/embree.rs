@@ -501,8 +501,18 @@ fn store_hit(
             ng = [0, 1, 2].map(|r| m[r] * ng[0] + m[3 + r] * ng[1] + m[6 + r] * ng[2]);
         }
     }
-    let inv = 1.0 / (ng[0] * ng[0] + ng[1] * ng[1] + ng[2] * ng[2]).sqrt();
-    hits.set_surface(i, tfar, u, v, ng.map(|c| c * inv));
+    let length2 = ng[0] * ng[0] + ng[1] * ng[1] + ng[2] * ng[2];
+    let n = if (f32::MIN_POSITIVE..f32::MAX).contains(&length2) {
+        let inv = 1.0 / length2.sqrt();
+        ng.map(|c| c * inv)
+    } else {
+        // Edges below ~10⁻¹⁰ m or above ~10¹⁰ m: the squared length under- or overflows
+        // f32 (a NaN or zero normal); f64 has the range.
+        let [x, y, z] = ng.map(f64::from);
+        let inv = 1.0 / (x * x + y * y + z * z).sqrt();
+        [x, y, z].map(|c| (c * inv) as f32)
+    };
+    hits.set_surface(i, tfar, u, v, n);
 }
 
 /// One ray of the batch in Embree's single-ray layout.
