@@ -873,6 +873,15 @@ pub struct ScaleResult {
     pub mrays_per_s: f64,
     /// Photon pass (track estimator), wall time.
     pub photons_per_s: f64,
+    /// Writing every output of the run (summary.json, scene_map.ply, indirect_map.bin,
+    /// report.html), wall seconds, and their size in bytes.
+    #[serde(default)]
+    pub output_s: f64,
+    #[serde(default)]
+    pub output_bytes: u64,
+    /// `VmHWM` after the outputs, MiB (`peak_rss_mib` is before them).
+    #[serde(default)]
+    pub peak_rss_with_outputs_mib: f64,
 }
 
 /// The instanced scene: `n` copies of `mesh` (y up, rotated to z up) on a square-ish
@@ -971,6 +980,7 @@ pub fn bench_scale_case(
     )?;
     let triangles_stored = g.triangle_count() as u64 + g.instanced.stored_triangle_count() as u64;
     let peak_rss_mib = memory_mib().1;
+    let (output_s, output_bytes) = scale_outputs(&scene, &options, &result)?;
     Ok(ScaleResult {
         case: case.to_string(),
         instances: g.instanced.instances.len() as u64,
@@ -987,7 +997,44 @@ pub fn bench_scale_case(
             / triangles_stored.max(1) as f64,
         mrays_per_s,
         photons_per_s: result.tallies.photons as f64 / result.elapsed_s,
+        output_s,
+        output_bytes,
+        peak_rss_with_outputs_mib: memory_mib().1,
     })
+}
+
+/// Writes every output of a finished bench-scale run into a temporary folder, as `run`
+/// does: (wall seconds, bytes written); the folder is removed.
+fn scale_outputs(
+    scene: &crate::scene::Scene,
+    options: &crate::run::RunOptions,
+    result: &crate::run::RunResult,
+) -> Result<(f64, u64)> {
+    use crate::output::{summary, write_atomic, write_run_files_with, Outputs};
+    let dir = std::env::temp_dir().join(format!("luxtally-bench-scale-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    let start = Instant::now();
+    let state = result.state(scene, options);
+    let s = summary::build(&state);
+    let json = serde_json::to_vec_pretty(&s)
+        .map_err(|e| Error::Unsupported(format!("summary.json: {e}")))?;
+    write_atomic(&dir.join("summary.json"), &json)?;
+    write_run_files_with(&dir, &state, &s, Outputs::ALL)?;
+    crate::render::IndirectMap::save_from_tallies(
+        &dir.join(crate::render::MAP_FILE),
+        scene,
+        &result.tallies,
+        result.setup.total_flux_lm,
+    )?;
+    let seconds = start.elapsed().as_secs_f64();
+    let bytes = std::fs::read_dir(&dir)
+        .map_err(|e| Error::io(&dir, e))?
+        .filter_map(|entry| entry.ok()?.metadata().ok())
+        .filter(|m| m.is_file())
+        .map(|m| m.len())
+        .sum();
+    std::fs::remove_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    Ok((seconds, bytes))
 }
 
 /// Mrays/s of 200,000 incoherent closest-hit rays through the bounds of everything in
@@ -1017,16 +1064,16 @@ pub fn scale_table(results: &[ScaleResult], threads: usize) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "| case | instances | triangles stored | triangles traced | BVH | set-up s (load + BVH) | set-up CPU s | peak RSS MiB | B/triangle | Mrays/s | photons/s |"
+        "| case | instances | triangles stored | triangles traced | BVH | set-up s (load + BVH) | set-up CPU s | peak RSS MiB | B/triangle | Mrays/s | photons/s | outputs s | outputs MB | peak with outputs MiB |"
     );
     let _ = writeln!(
         out,
-        "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|"
+        "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
     for r in results {
         let _ = writeln!(
             out,
-            "| {} | {} | {} | {:.3e} | {} | {:.2} ({:.2} + {:.2}) | {:.2} | {:.0} | {:.0} | {:.2} | {:.2} M |",
+            "| {} | {} | {} | {:.3e} | {} | {:.2} ({:.2} + {:.2}) | {:.2} | {:.0} | {:.0} | {:.2} | {:.2} M | {:.2} | {:.1} | {:.0} |",
             r.case,
             r.instances,
             r.triangles_stored,
@@ -1039,14 +1086,19 @@ pub fn scale_table(results: &[ScaleResult], threads: usize) -> String {
             r.peak_rss_mib,
             r.bytes_per_triangle,
             r.mrays_per_s,
-            r.photons_per_s / 1e6
+            r.photons_per_s / 1e6,
+            r.output_s,
+            r.output_bytes as f64 / 1e6,
+            r.peak_rss_with_outputs_mib
         );
     }
     let _ = writeln!(
         out,
         "\nEmbree, {threads} threads; one process per case (peak RSS = its VmHWM; B/triangle = its \
          growth from before the scene was made, per triangle stored); rays: 200,000 \
-         incoherent random closest-hit rays through the bounds; photons: track estimator."
+         incoherent random closest-hit rays through the bounds; photons: track estimator; \
+         outputs: summary.json, scene_map.ply, indirect_map.bin and report.html, as `run` \
+         writes them (peak RSS before them, and with them)."
     );
     out
 }
