@@ -41,7 +41,7 @@ pub fn points_per_side(cells: usize) -> u32 {
 /// Points per side are this many times more in a cell that a light's edge crosses
 /// ([`crosses_light_edge`]): 4× the samples per replicate there. On the cone-edge
 /// calibration test (10,000 photons) this brings the fewest effective replicates of a
-/// cell from ~3 to ≥ 10 and its z-scores' RMS there from 1.84 to 0.86; 4× per side
+/// cell from ~3 to ≥ 10 and the worst z from −9.6 to −3.6 (docs/method.md); 4× per side
 /// (16× the samples) costs so many rays that the replicates of every cell drop from
 /// 84 to 22 under the schedule's cap (z-scores t-tailed again).
 pub const EDGE_REFINEMENT: u32 = 2;
