@@ -49,35 +49,47 @@ pub const EDGE_REFINEMENT: u32 = 2;
 /// Probes per side of a cell where [`crosses_light_edge`] looks for a light's edge.
 const EDGE_PROBES_PER_SIDE: u32 = 8;
 
+/// A light's edge refines a cell only where that light gives at least this share of the
+/// cell's brightest unoccluded light (over the probes): a minor light's skewed samples
+/// hardly move the cell's value or σ, and in scenes of many luminaires with cut-offs
+/// (scenes/luminaires.toml) refining for every light's edge doubled the direct rays.
+const EDGE_MIN_SHARE: f64 = 0.1;
+
 /// Whether the unoccluded light of some light is zero at some probes of the cell and
 /// positive at others (a spot's cone edge, a source's plane, a receiver's acceptance
-/// cone crossing the cell), probed on the cell's border and at its centre. There few of
-/// a replicate's points see light, and those deepest into the lit part carry most of
-/// it: with 4 × 4 points per replicate a barely grazed cell's replicates are so skewed
-/// that a run of a few dozen of them reads low with a small σ (docs/method.md, "Known
-/// weakness"). The decision comes from the geometry and the lights alone, never from
-/// the cell's sampled values, so the refined replicates stay unbiased and the run
+/// cone crossing the cell), probed on the cell's border and at its centre, and that
+/// light gives at least [`EDGE_MIN_SHARE`] of the cell's light. There few of a
+/// replicate's points see light, and those deepest into the lit part carry most of it:
+/// with 4 × 4 points per replicate a barely grazed cell's replicates are so skewed that
+/// a run of a few dozen of them reads low with a small σ (docs/method.md, "Cells few
+/// photons reach"). The decision comes from the geometry and the lights alone, never
+/// from the cell's sampled values, so the refined replicates stay unbiased and the run
 /// deterministic.
 fn crosses_light_edge(
     emitters: &Emitters,
     grid: &ReceiverGrid,
     cell_point: impl Fn(f64, f64) -> DVec3,
 ) -> bool {
-    let n = EDGE_PROBES_PER_SIDE;
-    let probes = (0..4 * n)
-        .map(|k| {
-            let t = (k % n) as f64 / n as f64;
-            match k / n {
-                0 => (t, 0.0),
-                1 => (1.0, t),
-                2 => (1.0 - t, 1.0),
-                _ => (0.0, 1.0 - t),
-            }
-        })
-        .chain([(0.5, 0.5)]);
-    (0..emitters.emitters.len()).any(|light| {
-        let (mut lit, mut dark) = (false, false);
-        for (a, b) in probes.clone() {
+    const N: u32 = EDGE_PROBES_PER_SIDE;
+    let probe = |k: u32| {
+        if k == 4 * N {
+            return (0.5, 0.5);
+        }
+        let t = (k % N) as f64 / N as f64;
+        match k / N {
+            0 => (t, 0.0),
+            1 => (1.0, t),
+            2 => (1.0 - t, 1.0),
+            _ => (0.0, 1.0 - t),
+        }
+    };
+    let mut totals = [0.0; 4 * N as usize + 1];
+    // Per light crossing the cell: its brightest probe.
+    let mut crossing: Vec<f64> = Vec::new();
+    for light in 0..emitters.emitters.len() {
+        let (mut lit, mut dark, mut max) = (false, false, 0.0f64);
+        for (k, total) in totals.iter_mut().enumerate() {
+            let (a, b) = probe(k as u32);
             let mut e = 0.0;
             emitters.incoming(light, cell_point(a, b), &[(0.5, 0.5)], |inc| {
                 if let Some(f) = grid.arrival_factor(-inc.direction()) {
@@ -86,15 +98,20 @@ fn crosses_light_edge(
             });
             if e > 0.0 {
                 lit = true;
+                max = max.max(e);
+                *total += e;
             } else {
                 dark = true;
             }
-            if lit && dark {
-                return true;
-            }
         }
-        false
-    })
+        if lit && dark {
+            crossing.push(max);
+        }
+    }
+    let brightest = totals.iter().fold(0.0f64, |m, &t| m.max(t));
+    crossing
+        .iter()
+        .any(|&max| max >= EDGE_MIN_SHARE * brightest)
 }
 
 /// The light of one replicate's sample: weight of the light chosen, and for area sources
