@@ -193,11 +193,33 @@ pub struct DirectLight<'a> {
 }
 
 impl DirectLight<'_> {
+    /// Points per side of each cell of `grid` in a replicate: [`points_per_side`], times
+    /// [`EDGE_REFINEMENT`] where [`crosses_light_edge`]. The lights and the geometry
+    /// alone decide it, so a run computes it once (in parallel over cells).
+    pub fn cell_sides(&self, grid: &ReceiverGrid) -> Vec<u32> {
+        let m = points_per_side(grid.cell_count());
+        let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
+        (0..grid.cell_count() as u32)
+            .into_par_iter()
+            .map(|k| {
+                let (i, j) = ((k % grid.cells[0]) as f64, (k / grid.cells[0]) as f64);
+                let cell_point = |a: f64, b: f64| grid.point_at((i + a) / nu, (j + b) / nv);
+                if crosses_light_edge(self.emitters, grid, cell_point) {
+                    EDGE_REFINEMENT * m
+                } else {
+                    m
+                }
+            })
+            .collect()
+    }
+
     /// Adds replicates `first .. first + count` to every cell of `grid` (`cells` are the
-    /// grid's own sums), in parallel over cells; returns the shadow rays cast.
+    /// grid's own sums, `sides` its [`Self::cell_sides`]), in parallel over cells;
+    /// returns the shadow rays cast.
     pub fn add_replicates(
         &self,
         grid: &ReceiverGrid,
+        sides: &[u32],
         cells: &mut [CellSums],
         first: u64,
         count: u64,
@@ -207,21 +229,24 @@ impl DirectLight<'_> {
         }
         cells
             .par_iter_mut()
+            .zip(sides)
             .enumerate()
-            .map_init(Scratch::default, |s, (k, sums)| {
+            .map_init(Scratch::default, |s, (k, (sums, &m))| {
                 let cell = grid.first_cell as u64 + k as u64;
-                self.cell_replicates(grid, k as u32, cell, first, count, s, sums)
+                self.cell_replicates(grid, k as u32, m, cell, first, count, s, sums)
             })
             .sum()
     }
 
-    /// Replicates of local cell `k` (global index `cell`) into `sums`, in order, their
+    /// Replicates of local cell `k` (global index `cell`, `m` points per side) into
+    /// `sums`, in order, their
     /// shadow rays cast in blocks of [`REPLICATES_PER_BATCH`].
     #[allow(clippy::too_many_arguments)]
     fn cell_replicates(
         &self,
         grid: &ReceiverGrid,
         k: u32,
+        m: u32,
         cell: u64,
         first: u64,
         count: u64,
@@ -232,12 +257,6 @@ impl DirectLight<'_> {
         let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
         let cell_point = |a: f64, b: f64| grid.point_at((i as f64 + a) / nu, (j as f64 + b) / nv);
         let choice = LightChoice::for_cell(self.emitters, grid, cell_point(0.5, 0.5));
-        let m = points_per_side(grid.cell_count());
-        let m = if crosses_light_edge(self.emitters, grid, cell_point) {
-            EDGE_REFINEMENT * m
-        } else {
-            m
-        };
         let samples = m * m;
         let mut rays = 0;
         let mut block_start = first;
