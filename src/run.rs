@@ -236,6 +236,9 @@ pub(crate) struct Engine<'s> {
     pub(crate) tracer: Tracer<'s>,
     pub(crate) pool: rayon::ThreadPool,
     pub(crate) threads: usize,
+    /// Per next-event receiver (in order), its cells' points per side in a direct
+    /// replicate (`DirectLight::cell_sides`), computed at the first replicates.
+    direct_sides: std::sync::OnceLock<Vec<Vec<u32>>>,
 }
 
 impl<'s> Engine<'s> {
@@ -249,6 +252,7 @@ impl<'s> Engine<'s> {
             pool: thread_pool(threads)?,
             tracer: Tracer::new(scene, caster, options.seed, options.estimator),
             threads,
+            direct_sides: std::sync::OnceLock::new(),
         })
     }
 
@@ -287,16 +291,21 @@ impl<'s> Engine<'s> {
         }
         let start = Instant::now();
         let direct = self.tracer.direct_light();
-        for grid in self
-            .tracer
-            .receivers
-            .iter()
-            .filter(|g| g.estimator.direct_by_replicates())
-        {
+        let grids = || {
+            self.tracer
+                .receivers
+                .iter()
+                .filter(|g| g.estimator.direct_by_replicates())
+        };
+        let sides = self.direct_sides.get_or_init(|| {
+            self.pool
+                .install(|| grids().map(|g| direct.cell_sides(g)).collect())
+        });
+        for (grid, sides) in grids().zip(sides) {
             let cells = &mut tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
             tallies.direct_rays += self
                 .pool
-                .install(|| direct.add_replicates(grid, cells, first, wanted - first));
+                .install(|| direct.add_replicates(grid, sides, cells, first, wanted - first));
         }
         tallies.direct_replicates = wanted;
         start.elapsed().as_secs_f64()

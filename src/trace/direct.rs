@@ -38,6 +38,82 @@ pub fn points_per_side(cells: usize) -> u32 {
     }
 }
 
+/// Points per side are this many times more in a cell that a light's edge crosses
+/// ([`crosses_light_edge`]): 4× the samples per replicate there. On the cone-edge
+/// calibration test (10,000 photons) this brings the fewest effective replicates of a
+/// cell from ~3 to ≥ 10 and the worst z from −9.6 to −3.6 (docs/method.md); 4× per side
+/// (16× the samples) costs so many rays that the replicates of every cell drop from
+/// 84 to 22 under the schedule's cap (z-scores t-tailed again).
+pub const EDGE_REFINEMENT: u32 = 2;
+
+/// Probes per side of a cell where [`crosses_light_edge`] looks for a light's edge.
+const EDGE_PROBES_PER_SIDE: u32 = 8;
+
+/// A light's edge refines a cell only where that light gives at least this share of the
+/// cell's brightest unoccluded light (over the probes): a minor light's skewed samples
+/// hardly move the cell's value or σ, and in scenes of many luminaires with cut-offs
+/// (scenes/luminaires.toml) refining for every light's edge doubled the direct rays.
+const EDGE_MIN_SHARE: f64 = 0.1;
+
+/// Whether the unoccluded light of some light is zero at some probes of the cell and
+/// positive at others (a spot's cone edge, a source's plane, a receiver's acceptance
+/// cone crossing the cell), probed on the cell's border and at its centre, and that
+/// light gives at least [`EDGE_MIN_SHARE`] of the cell's light. There few of a
+/// replicate's points see light, and those deepest into the lit part carry most of it:
+/// with 4 × 4 points per replicate a barely grazed cell's replicates are so skewed that
+/// a run of a few dozen of them reads low with a small σ (docs/method.md, "Cells few
+/// photons reach"). The decision comes from the geometry and the lights alone, never
+/// from the cell's sampled values, so the refined replicates stay unbiased and the run
+/// deterministic.
+fn crosses_light_edge(
+    emitters: &Emitters,
+    grid: &ReceiverGrid,
+    cell_point: impl Fn(f64, f64) -> DVec3,
+) -> bool {
+    const N: u32 = EDGE_PROBES_PER_SIDE;
+    let probe = |k: u32| {
+        if k == 4 * N {
+            return (0.5, 0.5);
+        }
+        let t = (k % N) as f64 / N as f64;
+        match k / N {
+            0 => (t, 0.0),
+            1 => (1.0, t),
+            2 => (1.0 - t, 1.0),
+            _ => (0.0, 1.0 - t),
+        }
+    };
+    let mut totals = [0.0; 4 * N as usize + 1];
+    // Per light crossing the cell: its brightest probe.
+    let mut crossing: Vec<f64> = Vec::new();
+    for light in 0..emitters.emitters.len() {
+        let (mut lit, mut dark, mut max) = (false, false, 0.0f64);
+        for (k, total) in totals.iter_mut().enumerate() {
+            let (a, b) = probe(k as u32);
+            let mut e = 0.0;
+            emitters.incoming(light, cell_point(a, b), &[(0.5, 0.5)], |inc| {
+                if let Some(f) = grid.arrival_factor(-inc.direction()) {
+                    e += inc.normal_lx * f;
+                }
+            });
+            if e > 0.0 {
+                lit = true;
+                max = max.max(e);
+                *total += e;
+            } else {
+                dark = true;
+            }
+        }
+        if lit && dark {
+            crossing.push(max);
+        }
+    }
+    let brightest = totals.iter().fold(0.0f64, |m, &t| m.max(t));
+    crossing
+        .iter()
+        .any(|&max| max >= EDGE_MIN_SHARE * brightest)
+}
+
 /// The light of one replicate's sample: weight of the light chosen, and for area sources
 /// the point of the source it is paired with.
 struct LightChoice {
@@ -117,11 +193,33 @@ pub struct DirectLight<'a> {
 }
 
 impl DirectLight<'_> {
+    /// Points per side of each cell of `grid` in a replicate: [`points_per_side`], times
+    /// [`EDGE_REFINEMENT`] where [`crosses_light_edge`]. The lights and the geometry
+    /// alone decide it, so a run computes it once (in parallel over cells).
+    pub fn cell_sides(&self, grid: &ReceiverGrid) -> Vec<u32> {
+        let m = points_per_side(grid.cell_count());
+        let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
+        (0..grid.cell_count() as u32)
+            .into_par_iter()
+            .map(|k| {
+                let (i, j) = ((k % grid.cells[0]) as f64, (k / grid.cells[0]) as f64);
+                let cell_point = |a: f64, b: f64| grid.point_at((i + a) / nu, (j + b) / nv);
+                if crosses_light_edge(self.emitters, grid, cell_point) {
+                    EDGE_REFINEMENT * m
+                } else {
+                    m
+                }
+            })
+            .collect()
+    }
+
     /// Adds replicates `first .. first + count` to every cell of `grid` (`cells` are the
-    /// grid's own sums), in parallel over cells; returns the shadow rays cast.
+    /// grid's own sums, `sides` its [`Self::cell_sides`]), in parallel over cells;
+    /// returns the shadow rays cast.
     pub fn add_replicates(
         &self,
         grid: &ReceiverGrid,
+        sides: &[u32],
         cells: &mut [CellSums],
         first: u64,
         count: u64,
@@ -131,21 +229,24 @@ impl DirectLight<'_> {
         }
         cells
             .par_iter_mut()
+            .zip(sides)
             .enumerate()
-            .map_init(Scratch::default, |s, (k, sums)| {
+            .map_init(Scratch::default, |s, (k, (sums, &m))| {
                 let cell = grid.first_cell as u64 + k as u64;
-                self.cell_replicates(grid, k as u32, cell, first, count, s, sums)
+                self.cell_replicates(grid, k as u32, m, cell, first, count, s, sums)
             })
             .sum()
     }
 
-    /// Replicates of local cell `k` (global index `cell`) into `sums`, in order, their
+    /// Replicates of local cell `k` (global index `cell`, `m` points per side) into
+    /// `sums`, in order, their
     /// shadow rays cast in blocks of [`REPLICATES_PER_BATCH`].
     #[allow(clippy::too_many_arguments)]
     fn cell_replicates(
         &self,
         grid: &ReceiverGrid,
         k: u32,
+        m: u32,
         cell: u64,
         first: u64,
         count: u64,
@@ -156,7 +257,6 @@ impl DirectLight<'_> {
         let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
         let cell_point = |a: f64, b: f64| grid.point_at((i as f64 + a) / nu, (j as f64 + b) / nv);
         let choice = LightChoice::for_cell(self.emitters, grid, cell_point(0.5, 0.5));
-        let m = points_per_side(grid.cell_count());
         let samples = m * m;
         let mut rays = 0;
         let mut block_start = first;
