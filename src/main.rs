@@ -367,7 +367,8 @@ fn budget_for(args: &RunArgs) -> Result<limits::Budget> {
 
 /// Says so when `--bvh auto` chose the compact BVH: the run fits, but traces slower.
 fn note_bvh(args: &RunArgs, options: &RunOptions) {
-    if options.bvh == Bvh::Compact && args.bvh.is_none() && !args.quiet {
+    let auto = args.bvh.as_deref().is_none_or(|b| b == "auto");
+    if options.bvh == Bvh::Compact && auto && !args.quiet {
         eprintln!(
             "luxtally: the fast BVH would not fit the memory budget: building the compact \
              one (about half the memory, rays ≈ 35 % slower; --bvh to choose)"

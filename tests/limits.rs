@@ -290,12 +290,16 @@ fn the_compact_bvh_is_chosen_when_the_fast_one_would_not_fit() {
         luxtally(&args)
     };
 
-    let out = dir.join("auto");
-    let r = run(&out, &["--max-memory", &between]);
-    let err = String::from_utf8_lossy(&r.stderr);
-    assert!(r.status.success(), "{err}");
-    assert!(err.contains("building the compact one"), "{err}");
-    assert_eq!(summary_bvh(&out), "compact");
+    for (name, extra) in [("auto", &[][..]), ("auto-named", &["--bvh", "auto"][..])] {
+        let out = dir.join(name);
+        let mut args = vec!["--max-memory", between.as_str()];
+        args.extend_from_slice(extra);
+        let r = run(&out, &args);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(r.status.success(), "{err}");
+        assert!(err.contains("building the compact one"), "{name}: {err}");
+        assert_eq!(summary_bvh(&out), "compact");
+    }
 
     // Asked for by name, the fast BVH is refused under the same budget ...
     let out = dir.join("fast");
