@@ -167,6 +167,55 @@ impl Lanes {
     }
 }
 
+/// The lanes a bounce's survivors are compacted into, in place: survivor `j` is written
+/// from lane `k ≥ j`, so a lane is read before anything overwrites it.
+struct SurvivorLanes<'a> {
+    origin: [&'a mut [f32]; 3],
+    /// The normal of the side the survivor leaves its surface on.
+    side: [&'a mut [f32]; 3],
+    offset: &'a mut [u32],
+    segment: &'a mut [Segment],
+    rng: &'a mut [Pcg32],
+}
+
+impl<'a> SurvivorLanes<'a> {
+    /// The first `n` lanes of a batch's origins, survivors' sides and photon lanes.
+    fn of(
+        n: usize,
+        (ox, oy, oz): (&'a mut [f32], &'a mut [f32], &'a mut [f32]),
+        [sx, sy, sz]: &'a mut [Vec<f32>; 3],
+        lanes: &'a mut Lanes,
+    ) -> Self {
+        SurvivorLanes {
+            origin: [&mut ox[..n], &mut oy[..n], &mut oz[..n]],
+            side: [&mut sx[..n], &mut sy[..n], &mut sz[..n]],
+            offset: &mut lanes.offset[..n],
+            segment: &mut lanes.segment[..n],
+            rng: &mut lanes.rng[..n],
+        }
+    }
+
+    /// Survivor `j`: it leaves `point` on the `side` of its surface.
+    #[inline(always)]
+    fn write(
+        &mut self,
+        j: usize,
+        point: Vec3,
+        side: Vec3,
+        offset: u32,
+        segment: Segment,
+        rng: Pcg32,
+    ) {
+        let [ox, oy, oz] = &mut self.origin;
+        (ox[j], oy[j], oz[j]) = (point.x, point.y, point.z);
+        let [sx, sy, sz] = &mut self.side;
+        (sx[j], sy[j], sz[j]) = (side.x, side.y, side.z);
+        self.offset[j] = offset;
+        self.segment[j] = segment;
+        self.rng[j] = rng;
+    }
+}
+
 /// What the photon pass needs of a material, looked up once per hit: the BSDF and the
 /// flags that decide its path through a bounce, so the common case (a grey Lambertian
 /// reflector) skips the general lobe roulette.
@@ -354,38 +403,36 @@ impl<'a> Tracer<'a> {
         odd_first: bool,
     ) -> (usize, usize) {
         let (n, hits, rays, lanes) = (s.rays.len(), &s.hits, &mut s.rays, &mut s.lanes);
-        let (ox, oy, oz) = (&mut rays.ox[..n], &mut rays.oy[..n], &mut rays.oz[..n]);
-        let (dx, dy, dz) = (&mut rays.dx[..n], &mut rays.dy[..n], &mut rays.dz[..n]);
-        let (offsets, segments) = (&mut lanes.offset[..n], &mut lanes.segment[..n]);
-        let rngs = &mut lanes.rng[..n];
         // Every live photon has hit as often: the first hit is direct light.
         let hit_bounces = lanes.bounces;
+        let (dx, dy, dz) = (&mut rays.dx[..n], &mut rays.dy[..n], &mut rays.dz[..n]);
+        // Survivors leave their hit points along `side` normals (pass 3).
+        let mut out = SurvivorLanes::of(
+            n,
+            (&mut rays.ox, &mut rays.oy, &mut rays.oz),
+            &mut s.side,
+            lanes,
+        );
         let (indirect, capped) = (hit_bounces > 0, hit_bounces >= self.max_bounces);
         // Deposits are written for every hit and kept by advancing `d` where the
         // triangle holds a map: no branch.
         let first_deposit = tally.deposits.len();
         tally.deposits.resize(first_deposit + n, 0);
-        let deposits = &mut tally.deposits[first_deposit..];
-        let mut d = 0;
+        let (deposits, mut d) = (&mut tally.deposits[first_deposit..], 0);
         // Diffuse survivors whose direction pass 3 samples. Written for every
         // Lambertian hit and kept by advancing `m`, so the roulette is no branch.
-        let diffuse_slot = &mut s.diffuse_slot[..n];
-        let mut m = 0;
-        // Survivors leave their hit points along these normals (pass 3).
-        let [sx, sy, sz] = &mut s.side;
-        let (sx, sy, sz) = (&mut sx[..n], &mut sy[..n], &mut sz[..n]);
+        let (diffuse_slot, mut m) = (&mut s.diffuse_slot[..n], 0);
         // Histories that end here: rays that left the scene after `hit_bounces` hits,
-        // photons absorbed (or stopped by the bounce cap) at this hit.
-        let (mut escaped, mut ended) = (0u64, 0u64);
-        // Survivors so far: lane k's successor is written at j ≤ k.
-        let mut j = 0;
+        // photons absorbed (or stopped by the bounce cap) at this hit; and survivors so
+        // far (lane k's successor is written at j ≤ k).
+        let (mut escaped, mut ended, mut j) = (0u64, 0u64, 0);
         for k in 0..n {
             let Some(surface) = hits.surface(k, self.geometry) else {
                 escaped += 1;
                 continue;
             };
             let dir = DVec3::new(dx[k] as f64, dy[k] as f64, dz[k] as f64);
-            let offset = offsets[k];
+            let offset = out.offset[k];
             let normal = surface.normal;
             let n_d = normal.as_dvec3();
             let cos_in = dir.dot(n_d);
@@ -393,8 +440,7 @@ impl<'a> Tracer<'a> {
             // Unmapped (instanced) objects scatter and occlude but hold no tallies.
             let (tri, has_map) = (surface.mapped.unwrap_or(0), surface.mapped.is_some());
             let odd = (offset % 2 == 1) != odd_first;
-            let code_tri = tri;
-            deposits[d] = deposit_code(code_tri, back_face, indirect, odd);
+            deposits[d] = deposit_code(tri, back_face, indirect, odd);
             d += has_map as usize;
             let p = surface.point;
             let facing = if back_face { -normal } else { normal };
@@ -405,7 +451,7 @@ impl<'a> Tracer<'a> {
                     normal,
                     -dir,
                     surfacing,
-                    (offset, &mut rngs[k]),
+                    (offset, &mut out.rng[k]),
                     flux,
                     &mut s.shadow_rays,
                     &mut s.shadow_scores,
@@ -418,18 +464,13 @@ impl<'a> Tracer<'a> {
             }
             if surfacing.lambert_only {
                 // `Bsdf::sample`'s roulette and diffuse lobe for a material with no other
-                // lobe: the same draws (the direction's, in f32, in pass 3, into the
-                // hemisphere the photon arrived from). The slot is written whatever the
-                // roulette says and kept only if the photon survives.
-                // The stream is copied whole before its draw, not after: a 16-byte load
-                // of what the draw has just stored 8 bytes of would wait for the store.
-                let mut rng = rngs[k].clone();
+                // lobe: the same draws (the direction's in f32 in pass 3, into the hemisphere
+                // the photon arrived from). The slot is written whatever the roulette says
+                // and kept if the photon survives. The stream is copied before its draw:
+                // a 16-byte load of what the draw just stored 8 bytes of would wait for it.
+                let mut rng = out.rng[k].clone();
                 let survives = (rng.next_u32() as u64) < surfacing.survives_below;
-                (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
-                (sx[j], sy[j], sz[j]) = (facing.x, facing.y, facing.z);
-                offsets[j] = offset;
-                segments[j] = Segment::Diffuse;
-                rngs[j] = rng;
+                out.write(j, p, facing, offset, Segment::Diffuse, rng);
                 diffuse_slot[m] = j as u32;
                 let kept = survives as usize;
                 ended += !survives as u64;
@@ -437,19 +478,16 @@ impl<'a> Tracer<'a> {
                 m += kept;
                 continue;
             }
-            let mut rng = rngs[k].clone();
+            let mut rng = out.rng[k].clone();
             let Some(sample) = scatter(&surfacing.bsdf, dir, n_d, &mut rng) else {
                 ended += 1;
                 continue;
             };
             let side = if sample.transmitted { -facing } else { facing };
             let w = sample.dir.as_vec3();
-            (ox[j], oy[j], oz[j]) = (p.x, p.y, p.z);
-            (sx[j], sy[j], sz[j]) = (side.x, side.y, side.z);
             (dx[j], dy[j], dz[j]) = (w.x, w.y, w.z);
-            offsets[j] = offset;
-            segments[j] = Segment::after(sample.kind, surfacing.glossy_connectable);
-            rngs[j] = rng;
+            let segment = Segment::after(sample.kind, surfacing.glossy_connectable);
+            out.write(j, p, side, offset, segment, rng);
             j += 1;
         }
         tally.deposits.truncate(first_deposit + d);
