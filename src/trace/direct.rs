@@ -443,6 +443,72 @@ pub fn relative_variances(cells: &[CellSums], photons: u64, replicates: u64) -> 
 mod tests {
     use super::*;
 
+    /// A spot 2 m above a 3 m × 3 m receiver of 16 × 16 cells, lit within 30° of its
+    /// axis: cells the cone's edge clearly crosses are refined, cells clearly inside or
+    /// outside it are not.
+    #[test]
+    fn cells_a_cone_edge_crosses_are_refined_and_no_others() {
+        let scene = crate::scene::load_str(
+            r#"
+            [[lights]]
+            type = "spot"
+            position = [0, 0, 2]
+            direction = [0, 0, -1]
+            intensity_cd = 2000
+            cone_deg = 30
+            falloff_deg = 15
+            [[receivers]]
+            name = "r"
+            corner = [-1.5, -1.5, 0]
+            u = [3, 0, 0]
+            v = [0, 3, 0]
+            cells = [16, 16]
+            estimator = "next_event"
+            "#,
+            std::path::Path::new("."),
+            "spot.toml",
+        )
+        .expect("scene loads");
+        let emitters = Emitters::new(&scene);
+        let r = &scene.receivers[0];
+        let grid = ReceiverGrid::new(r, scene.geometry.origin, 0, r.estimator);
+        let caster = crate::accel::build(crate::accel::Backend::Embree, &scene.geometry)
+            .expect("backend builds");
+        let direct = DirectLight {
+            emitters: &emitters,
+            caster: caster.as_ref(),
+            slack: 1e-6,
+            seed: 1,
+        };
+        let sides = direct.cell_sides(&grid);
+        let base = points_per_side(grid.cell_count());
+        // Radius on the receiver at which the spot's axis angle is `deg`.
+        let radius = |deg: f64| 2.0 * deg.to_radians().tan();
+        let w = 3.0 / 16.0;
+        let mut refined = 0;
+        for (k, &side) in sides.iter().enumerate() {
+            let (x0, y0) = (-1.5 + (k % 16) as f64 * w, -1.5 + (k / 16) as f64 * w);
+            let nearest = |lo: f64| (0.0f64).clamp(lo, lo + w);
+            let farthest = |lo: f64| lo.abs().max((lo + w).abs());
+            let r_min = nearest(x0).hypot(nearest(y0));
+            let r_max = farthest(x0).hypot(farthest(y0));
+            if r_max < radius(29.0) || r_min > radius(31.0) {
+                assert_eq!(
+                    side, base,
+                    "cell {k} lies wholly inside or outside the cone"
+                );
+            } else if r_min < radius(29.0) && r_max > radius(31.0) {
+                assert_eq!(
+                    side,
+                    EDGE_REFINEMENT * base,
+                    "the cone's edge crosses cell {k}"
+                );
+            }
+            refined += (side != base) as usize;
+        }
+        assert!(refined > 20, "{refined} cells refined");
+    }
+
     #[test]
     fn shuffle_is_a_permutation() {
         let mut rng = crate::rng::aux_stream(9);
