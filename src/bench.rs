@@ -945,29 +945,21 @@ pub fn bench_scale_case(
     let load_s = start.elapsed().as_secs_f64();
     let load_cpu_s = process_cpu_seconds() - cpu_before_s;
     let backend = crate::accel::Backend::Embree;
-    // As a run decides (`limits::check_run`), against the memory available.
+    let options = RunOptions {
+        threads,
+        backend,
+        bvh,
+        estimator: Some(Estimator::Track),
+        ..RunOptions::with_photons(&scene, photons)
+    };
+    // The BVH a run would choose against the memory available (or its refusal).
     let budget = crate::limits::Budget::new(None)?;
-    let g = &scene.geometry;
-    let (mapped, prototypes) = (
-        g.triangle_count() as u64,
-        g.instanced.stored_triangle_count() as u64,
-    );
-    let bvh = crate::limits::choose_bvh(bvh, backend, |layout| {
-        budget.fits(&crate::limits::geometry_estimate(
-            mapped, prototypes, backend, layout,
-        ))
-    });
+    let bvh = crate::limits::check_run(&scene, &options, None, true, &budget)?;
     let caster = crate::accel::build_with(backend, bvh, &scene.geometry)?;
     let setup_s = start.elapsed().as_secs_f64();
     let setup_cpu_s = process_cpu_seconds() - cpu_before_s;
     let g = &scene.geometry;
     let mrays_per_s = scale_mrays(g, caster.as_ref(), threads)?;
-    let options = RunOptions {
-        threads,
-        backend,
-        estimator: Some(Estimator::Track),
-        ..RunOptions::with_photons(&scene, photons)
-    };
     // The photon pass reuses the BVH (a second one would count in the peak RSS).
     let result = run_from(
         &scene,
@@ -1010,22 +1002,10 @@ fn scale_outputs(
     options: &crate::run::RunOptions,
     result: &crate::run::RunResult,
 ) -> Result<(f64, u64)> {
-    use crate::output::{summary, write_atomic, write_run_files_with, Outputs};
     let dir = std::env::temp_dir().join(format!("luxtally-bench-scale-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let start = Instant::now();
-    let state = result.state(scene, options);
-    let s = summary::build(&state);
-    let json = serde_json::to_vec_pretty(&s)
-        .map_err(|e| Error::Unsupported(format!("summary.json: {e}")))?;
-    write_atomic(&dir.join("summary.json"), &json)?;
-    write_run_files_with(&dir, &state, &s, Outputs::ALL)?;
-    crate::render::IndirectMap::save_from_tallies(
-        &dir.join(crate::render::MAP_FILE),
-        scene,
-        &result.tallies,
-        result.setup.total_flux_lm,
-    )?;
+    crate::render::write_outputs(&dir, scene, options, result, crate::output::Outputs::ALL)?;
     let seconds = start.elapsed().as_secs_f64();
     let bytes = std::fs::read_dir(&dir)
         .map_err(|e| Error::io(&dir, e))?

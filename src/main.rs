@@ -9,7 +9,7 @@ use luxtally::criteria::StopCriteria;
 use luxtally::distributed::Distributor;
 use luxtally::input::one_line;
 use luxtally::limits;
-use luxtally::output::{summary, write_atomic};
+use luxtally::output::{save_summary, summary, write_atomic};
 use luxtally::render::{self, IndirectMap, MAP_FILE};
 use luxtally::run::{run_from, Observer, RunOptions, RunResult, RunState, ShardRange, Start};
 use luxtally::scene::{Estimator, Scene};
@@ -365,10 +365,10 @@ fn budget_for(args: &RunArgs) -> Result<limits::Budget> {
     Ok(budget)
 }
 
-/// Says so when `--bvh auto` chose the compact BVH: the run fits, but traces slower.
-fn note_bvh(args: &RunArgs, options: &RunOptions) {
-    let auto = args.bvh.as_deref().is_none_or(|b| b == "auto");
-    if options.bvh == Bvh::Compact && auto && !args.quiet {
+/// Says so when `--bvh auto` (`asked`) chose the compact BVH: the run fits, but traces
+/// slower.
+fn note_bvh(args: &RunArgs, asked: Bvh, chosen: Bvh) {
+    if asked == Bvh::Auto && chosen == Bvh::Compact && !args.quiet {
         eprintln!(
             "luxtally: the fast BVH would not fit the memory budget: building the compact \
              one (about half the memory, rays ≈ 35 % slower; --bvh to choose)"
@@ -474,7 +474,7 @@ fn finish_run(
     outputs: luxtally::output::Outputs,
 ) -> Result<()> {
     if result.shard.is_none() {
-        let s = write_outputs(out, scene, options, result, outputs)?;
+        let s = render::write_outputs(out, scene, options, result, outputs)?;
         print_run(args, &s, out);
     }
     Ok(())
@@ -486,30 +486,6 @@ fn outputs_of(args: &RunArgs) -> Result<luxtally::output::Outputs> {
         Ok(luxtally::output::Outputs::ALL),
         luxtally::output::Outputs::parse,
     )
-}
-
-/// summary.json, the run files `outputs` asks for and the indirect map of a finished
-/// run; returns the summary.
-fn write_outputs(
-    out: &Path,
-    scene: &Scene,
-    options: &RunOptions,
-    result: &RunResult,
-    outputs: luxtally::output::Outputs,
-) -> Result<summary::Summary> {
-    let state = result.state(scene, options);
-    let s = summary::build(&state);
-    save_summary(out, &s)?;
-    luxtally::output::write_run_files_with(out, &state, &s, outputs)?;
-    if outputs.indirect {
-        IndirectMap::save_from_tallies(
-            &out.join(MAP_FILE),
-            scene,
-            &result.tallies,
-            result.setup.total_flux_lm,
-        )?;
-    }
-    Ok(s)
 }
 
 /// `--resume` and `--shard`: the checkpoint's state, checked against the scene and
@@ -621,7 +597,7 @@ fn merge_command(
     let setup = Instant::now();
     let caster = accel::build_with(options.backend, options.bvh, &scene.geometry)?;
     let result = luxtally::checkpoint::merge(&scene, &options, caster.as_ref(), setup, shards)?;
-    let _ = write_outputs(
+    let _ = render::write_outputs(
         out,
         &scene,
         &options,
@@ -642,8 +618,9 @@ fn run_command(args: RunArgs) -> Result<()> {
     let scene = luxtally::scene::load(&args.scene)?;
     let mut options = run_options(&args, &scene)?;
     let outputs = outputs_of(&args)?;
+    let asked = options.bvh;
     options.bvh = limits::check_run(&scene, &options, None, true, &budget)?;
-    note_bvh(&args, &options);
+    note_bvh(&args, asked, options.bvh);
     let dir = out_dir(args.out.as_deref().or(args.resume.as_deref()), &scene)?;
     dir.keep_on(run_into(&args, outputs, &scene, &options, &dir.path))
 }
@@ -699,6 +676,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
             "render needs the whole run: merge the shards, then render --from",
         ));
     }
+    let asked = options.bvh;
     options.bvh = limits::check_run(
         &scene,
         &options,
@@ -706,7 +684,7 @@ fn render_command(args: RenderArgs) -> Result<()> {
         args.from.is_none(),
         &budget,
     )?;
-    note_bvh(&args.run, &options);
+    note_bvh(&args.run, asked, options.bvh);
     let dir = out_dir(
         args.run
             .out
@@ -818,12 +796,6 @@ fn print_run(args: &RunArgs, s: &summary::Summary, out: &Path) {
             100.0 * s.global.rel_error.arithmetic
         );
     }
-}
-
-fn save_summary(out: &Path, s: &summary::Summary) -> Result<()> {
-    let json = serde_json::to_vec_pretty(s)
-        .map_err(|e| Error::Unsupported(format!("summary.json: {e}")))?;
-    write_atomic(&out.join("summary.json"), &json)
 }
 
 /// Progress on stderr and a summary.json saved every few seconds, so a long run never

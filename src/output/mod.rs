@@ -111,6 +111,13 @@ impl Outputs {
     }
 }
 
+/// summary.json of `s` in `out` (pretty JSON, written atomically).
+pub fn save_summary(out: &Path, s: &summary::Summary) -> Result<()> {
+    let json = serde_json::to_vec_pretty(s)
+        .map_err(|e| Error::Unsupported(format!("summary.json: {e}")))?;
+    write_atomic(&out.join("summary.json"), &json)
+}
+
 /// Every file besides summary.json: `receivers/NAME.{exr,csv,png}`,
 /// `receivers/NAME_error.png`, `scene_map.ply` and `report.html`.
 pub fn write_run_files(out: &Path, state: &RunState<'_>) -> Result<()> {

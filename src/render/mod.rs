@@ -17,6 +17,8 @@ pub use eye::{
 pub use map::{IndirectField, IndirectMap, MAP_FILE};
 
 use crate::accel::RayCaster;
+use crate::output::{save_summary, summary, write_run_files_with, Outputs};
+use crate::run::{RunOptions, RunResult};
 use crate::scene::{Camera, Scene};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -118,4 +120,28 @@ pub fn render_with(
         rays,
         elapsed_s: start.elapsed().as_secs_f64(),
     })
+}
+
+/// summary.json, the run files `outputs` asks for and the indirect map (here because
+/// `render --from` reads it) of a finished run, into `out`; returns the summary.
+pub fn write_outputs(
+    out: &std::path::Path,
+    scene: &Scene,
+    options: &RunOptions,
+    result: &RunResult,
+    outputs: Outputs,
+) -> Result<summary::Summary> {
+    let state = result.state(scene, options);
+    let s = summary::build(&state);
+    save_summary(out, &s)?;
+    write_run_files_with(out, &state, &s, outputs)?;
+    if outputs.indirect {
+        IndirectMap::save_from_tallies(
+            &out.join(MAP_FILE),
+            scene,
+            &result.tallies,
+            result.setup.total_flux_lm,
+        )?;
+    }
+    Ok(s)
 }
