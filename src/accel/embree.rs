@@ -157,6 +157,10 @@ impl EmbreeScene {
         }
         let config = CString::new(config)
             .map_err(|_| Error::Embree("device config contains a NUL byte".into()))?;
+        let triangles = geometry.triangles.len() + geometry.instanced.stored_triangle_count();
+        // Dropped when `build` returns: huge pages come back, collapsed in the background.
+        let _deferred = (triangles >= super::huge_pages::DEFER_FROM_TRIANGLES)
+            .then(super::huge_pages::Deferred::new);
         // SAFETY: `config` is a valid NUL-terminated string for the duration of the call.
         let device = unsafe { sys::rtcNewDevice(config.as_ptr()) };
         if device.is_null() {

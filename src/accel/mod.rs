@@ -7,6 +7,7 @@
 #[cfg(feature = "obvhs")]
 pub mod bvh;
 pub mod embree;
+pub mod huge_pages;
 
 use crate::scene::Geometry;
 use crate::{Error, Result};
