@@ -489,13 +489,15 @@ impl<'r, 's> Epochs<'r, 's> {
         let stats_start = Instant::now();
         let scene = self.scene;
         let stop = &self.options.stop;
-        let error = target_error(
-            scene,
-            &self.target,
-            &self.tallies,
-            self.engine.tracer.emitters.total_flux_lm,
-            stop.absolute,
-        );
+        let error = self.engine.pool.install(|| {
+            target_error(
+                scene,
+                &self.target,
+                &self.tallies,
+                self.engine.tracer.emitters.total_flux_lm,
+                stop.absolute,
+            )
+        });
         let mut point = HistoryPoint {
             elapsed_s,
             photons: self.tallies.photons,
