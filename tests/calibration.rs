@@ -667,7 +667,9 @@ fn binomial_bounds_are_those_of_the_tables() {
 /// exact illuminance is Φ·Ω_k/(4π·A_k) (its solid angle from the source) plus the
 /// sphere's uniform indirect ρΦ/((1 − ρ)S) wherever the source is. At 30,000 photons
 /// triangles far from the source draw about 10 hits each, those near it about 600.
-fn sphere_map_z(seeds: u64, old: bool) -> Vec<f64> {
+/// `split_vertices`: every triangle keeps its own three vertices (as a flat-shaded OBJ
+/// or an STL export has them).
+fn sphere_map_z(seeds: u64, split_vertices: bool, sigma: MapSigma) -> Vec<f64> {
     use luxtally::scene::adjacency::VertexFaces;
     use luxtally::stats::{triangle_illuminance_lx, triangle_rel_errors, MapKind};
     let (rho, intensity) = (0.2, 100.0);
@@ -685,9 +687,25 @@ fn sphere_map_z(seeds: u64, old: bool) -> Vec<f64> {
         position = [0, 0.1, 0.8]
         intensity_cd = 100
     "#;
-    let s = scene(toml);
+    let mut s = scene(toml);
+    if split_vertices {
+        let g = &mut s.geometry;
+        let vertices: Vec<glam::Vec3> = g
+            .triangles
+            .iter()
+            .flat_map(|t| t.map(|i| g.vertices[i as usize]))
+            .collect();
+        let triangles: Vec<[u32; 3]> = (0..g.triangle_count() as u32)
+            .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
+            .collect();
+        g.vertices = luxtally::scene::Shared::padded(vertices);
+        g.triangles = luxtally::scene::Shared::padded(triangles);
+    }
     let g = &s.geometry;
-    let adjacent = VertexFaces::new(&g.triangles, g.vertices.len());
+    let adjacent = match sigma {
+        MapSigma::ByIndex => VertexFaces::new(&g.triangles, g.vertices.len()),
+        _ => VertexFaces::by_position(&g.triangles, &g.vertices),
+    };
     let flux = 4.0 * PI * intensity;
     let indirect = rho * flux / ((1.0 - rho) * g.total_area_m2());
     let source = glam::DVec3::new(0.0, 0.1, 0.8);
@@ -716,10 +734,9 @@ fn sphere_map_z(seeds: u64, old: bool) -> Vec<f64> {
             let e =
                 |parity| triangle_illuminance_lx(t, MapKind::Total, k, g.area_m2(k), flux, parity);
             let value = e(None);
-            let sigma = if old {
-                (e(Some(true)) - e(Some(false))).abs() / 2.0
-            } else {
-                rel[k] * value
+            let sigma = match sigma {
+                MapSigma::OddEven => (e(Some(true)) - e(Some(false))).abs() / 2.0,
+                _ => rel[k] * value,
             };
             if rel[k].is_nan() {
                 continue;
@@ -734,9 +751,21 @@ fn sphere_map_z(seeds: u64, old: bool) -> Vec<f64> {
     z
 }
 
+/// Which σ of a scene-map triangle [`sphere_map_z`] tests.
+#[derive(Clone, Copy)]
+enum MapSigma {
+    /// Its own odd/even difference (before 2026-11-27).
+    OddEven,
+    /// `triangle_rel_errors` with neighbours sharing a vertex index (before the second
+    /// session of 2026-11-27: none in a mesh whose triangles keep their own vertices).
+    ByIndex,
+    /// `triangle_rel_errors` with neighbours sharing a corner's position (what runs do).
+    ByPosition,
+}
+
 #[test]
 fn dim_triangles_of_the_scene_map_are_calibrated() {
-    let z = sphere_map_z(4, false);
+    let z = sphere_map_z(4, false, MapSigma::ByPosition);
     assert!(
         z.len() > 4 * 1200,
         "{} triangles with a known error",
@@ -748,11 +777,29 @@ fn dim_triangles_of_the_scene_map_are_calibrated() {
 #[test]
 #[ignore]
 fn study_sphere_map_odd_even() {
-    let z = sphere_map_z(4, true);
+    let z = sphere_map_z(4, false, MapSigma::OddEven);
     let zero = z.iter().filter(|x| x.is_infinite()).count();
     let finite: Vec<f64> = z.into_iter().filter(|x| x.is_finite()).collect();
     eprintln!("odd/even per triangle: {zero} triangles with σ = 0 but hits");
     assert_calibrated_tails(&finite, "scene map triangles, odd/even σ");
+}
+
+#[test]
+fn dim_triangles_of_a_mesh_without_shared_vertices_are_calibrated() {
+    let z = sphere_map_z(4, true, MapSigma::ByPosition);
+    assert!(
+        z.len() > 4 * 1200,
+        "{} triangles with a known error",
+        z.len()
+    );
+    assert_calibrated_tails(&z, "scene map triangles, vertices not shared");
+}
+
+#[test]
+#[ignore]
+fn study_sphere_map_neighbours_by_vertex_index_without_shared_vertices() {
+    let z = sphere_map_z(4, true, MapSigma::ByIndex);
+    assert_calibrated_tails(&z, "scene map triangles, vertices not shared, by index");
 }
 
 /// CPU time of the per-cell statistics of a 1000 × 1000-cell receiver (printed, not
@@ -835,7 +882,7 @@ fn study_triangle_errors_cost() {
     let result = run(&s, &opts, &AtomicBool::new(false), &mut ()).expect("run succeeds");
     let g = &s.geometry;
     let start = std::time::Instant::now();
-    let adjacent = VertexFaces::new(&g.triangles, g.vertices.len());
+    let adjacent = VertexFaces::by_position(&g.triangles, &g.vertices);
     let rel = luxtally::stats::triangle_rel_errors(&result.tallies, &g.triangles, &adjacent, |k| {
         g.area_m2(k)
     });

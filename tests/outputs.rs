@@ -270,7 +270,8 @@ fn scene_map_ply_reads_back_to_the_triangle_map() {
         assert_eq!(faces.len(), g.triangle_count());
         let t = state.tallies;
         let flux = state.setup.total_flux_lm;
-        let adjacent = luxtally::scene::adjacency::VertexFaces::new(&g.triangles, g.vertices.len());
+        let adjacent =
+            luxtally::scene::adjacency::VertexFaces::by_position(&g.triangles, &g.vertices);
         let rel_errors =
             luxtally::stats::triangle_rel_errors(t, &g.triangles, &adjacent, |k| g.area_m2(k));
         let mut weight = vec![0.0; g.vertices.len()];

@@ -63,7 +63,7 @@ pub fn scene_map_ply(state: &RunState<'_>) -> Vec<u8> {
 /// only the per-face and per-vertex values are held, never the file's bytes.
 pub fn write_scene_map_ply(state: &RunState<'_>, out: &mut impl Write) -> std::io::Result<()> {
     let g = &state.scene.geometry;
-    let adjacent = VertexFaces::new(&g.triangles, g.vertices.len());
+    let adjacent = VertexFaces::by_position(&g.triangles, &g.vertices);
     let faces = face_map(state, &adjacent);
     let vertex_lx = vertex_means(
         &g.triangles,

@@ -31,14 +31,47 @@ pub fn vertex_means(
 pub struct VertexFaces {
     start: Vec<usize>,
     faces: Vec<u32>,
+    /// With [`VertexFaces::by_position`]: each vertex's representative among the
+    /// vertices at its position (rows are the representatives').
+    representative: Option<Vec<u32>>,
 }
 
 impl VertexFaces {
     pub fn new(triangles: &[[u32; 3]], vertex_count: usize) -> VertexFaces {
+        Self::rows(triangles, vertex_count, |i| i)
+    }
+
+    /// [`VertexFaces::new`] with the vertices at one position counted as one vertex, so
+    /// that the neighbours of a mesh whose triangles keep their own vertices (a
+    /// flat-shaded OBJ or glTF, an STL export, a crease split for its normals) are found
+    /// all the same.
+    pub fn by_position(triangles: &[[u32; 3]], vertices: &[glam::Vec3]) -> VertexFaces {
+        use rayon::prelude::*;
+        // + 0.0 makes −0.0 +0.0: one point, one key.
+        let key = |i: u32| vertices[i as usize].to_array().map(|x| (x + 0.0).to_bits());
+        let mut order: Vec<u32> = (0..vertices.len() as u32).collect();
+        order.par_sort_unstable_by_key(|&i| (key(i), i));
+        let mut representative = vec![0u32; vertices.len()];
+        for run in order.chunk_by(|&a, &b| key(a) == key(b)) {
+            for &i in run {
+                representative[i as usize] = run[0];
+            }
+        }
+        let mut rows = Self::rows(triangles, vertices.len(), |i| representative[i as usize]);
+        rows.representative = Some(representative);
+        rows
+    }
+
+    /// The rows of the vertices `vertex(i)` stands for each triangle corner i.
+    fn rows(
+        triangles: &[[u32; 3]],
+        vertex_count: usize,
+        vertex: impl Fn(u32) -> u32,
+    ) -> VertexFaces {
         let mut start = vec![0usize; vertex_count + 1];
         for t in triangles {
             for &i in t {
-                start[i as usize + 1] += 1;
+                start[vertex(i) as usize + 1] += 1;
             }
         }
         for i in 0..vertex_count {
@@ -48,15 +81,22 @@ impl VertexFaces {
         let mut faces = vec![0u32; start[vertex_count]];
         for (k, t) in triangles.iter().enumerate() {
             for &i in t {
-                faces[fill[i as usize]] = k as u32;
-                fill[i as usize] += 1;
+                let v = vertex(i) as usize;
+                faces[fill[v]] = k as u32;
+                fill[v] += 1;
             }
         }
-        VertexFaces { start, faces }
+        VertexFaces {
+            start,
+            faces,
+            representative: None,
+        }
     }
 
-    /// The triangles sharing vertex `v`, in increasing order.
+    /// The triangles sharing vertex `v` (with [`VertexFaces::by_position`]: sharing its
+    /// position), in increasing order.
     pub fn faces(&self, v: usize) -> &[u32] {
+        let v = self.representative.as_ref().map_or(v, |r| r[v] as usize);
         &self.faces[self.start[v]..self.start[v + 1]]
     }
 
@@ -99,6 +139,35 @@ mod tests {
             vf.area_weighted_mean(4, |j| [1.0, 3.0][j], |_| true, |_| [1.0]),
             None
         );
+    }
+
+    #[test]
+    fn vertices_at_one_position_share_their_faces() {
+        use glam::Vec3;
+        // Two triangles with their own vertices meeting along an edge (x = 1), a third
+        // touching at one corner with −0.0 for 0.
+        let vertices = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-0.0, 0.0, -0.0),
+            Vec3::new(-1.0, 0.0, 0.0),
+            Vec3::new(0.0, -1.0, 0.0),
+        ];
+        let triangles = [[0, 1, 2], [3, 4, 5], [6, 7, 8]];
+        let welded = VertexFaces::by_position(&triangles, &vertices);
+        assert_eq!(welded.faces(1), &[0, 1]);
+        assert_eq!(welded.faces(3), &[0, 1]);
+        assert_eq!(welded.faces(5), &[0, 1]);
+        assert_eq!(welded.faces(0), &[0, 2]);
+        assert_eq!(welded.faces(6), &[0, 2]);
+        assert_eq!(welded.faces(4), &[1]);
+        let by_index = VertexFaces::new(&triangles, vertices.len());
+        assert_eq!(by_index.faces(1), &[0]);
+        assert_eq!(by_index.faces(6), &[2]);
     }
 
     #[test]

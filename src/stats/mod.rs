@@ -460,9 +460,10 @@ pub fn triangle_face_illuminance_lx(
 /// the few large faces of a bright room). As for receiver cells
 /// ([`pooled_variance`]), a triangle that drew few hits would report a small value and
 /// a small σ; the count it should have drawn is estimated by its neighbours (triangles
-/// sharing a vertex, those sharing an edge counted twice): λ = median of their hits per
-/// m² × its area, and
-/// Var = D·max(λ, c − min(√c, λ)).
+/// touching one of its corners' positions — `adjacent` from
+/// [`crate::scene::adjacency::VertexFaces::by_position`], so that meshes whose triangles
+/// keep their own vertices have neighbours too — those sharing an edge counted twice):
+/// λ = median of their hits per m² × its area, and Var = D·max(λ, c − min(√c, λ)).
 pub fn triangle_rel_errors(
     t: &Tallies,
     triangles: &[[u32; 3]],
