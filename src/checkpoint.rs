@@ -26,7 +26,8 @@ use crate::trace::direct::{DirectSchedule, PILOT_REPLICATES};
 use crate::trace::CHUNK_PHOTONS;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
-use std::io::Write;
+use std::borrow::Cow;
+use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -114,14 +115,16 @@ impl SavedPoint {
     }
 }
 
-/// [`Tallies`] as saved: every compensated sum as (sum, compensation).
+/// [`Tallies`] as saved: every compensated sum as (sum, compensation). The triangle
+/// maps are borrowed from the run where the save is awaited (the last one), copied where
+/// another thread writes it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-struct SavedTallies {
+struct SavedTallies<'a> {
     photons: u64,
     rays: u64,
     killed_by_bounce_cap: u64,
     history_hits: [u128; 4],
-    triangle_hits: crate::tally::TriangleCounts,
+    triangle_hits: Cow<'a, crate::tally::TriangleCounts>,
     /// The cells, packed by [`pack_cells`].
     cells: Bytes,
     direct_replicates: u64,
@@ -129,16 +132,20 @@ struct SavedTallies {
     dark: bool,
 }
 
-impl SavedTallies {
-    /// `t` as saved, with `cells` its cells packed (or empty, to be packed on another
-    /// thread).
-    fn of(t: &Tallies, cells: Bytes) -> SavedTallies {
+impl<'a> SavedTallies<'a> {
+    /// `t` as saved, with `maps` its triangle maps (borrowed or copied) and `cells` its
+    /// cells packed (or empty, to be packed on another thread).
+    fn of(
+        t: &Tallies,
+        maps: Cow<'a, crate::tally::TriangleCounts>,
+        cells: Bytes,
+    ) -> SavedTallies<'a> {
         SavedTallies {
             photons: t.photons,
             rays: t.rays,
             killed_by_bounce_cap: t.killed_by_bounce_cap,
             history_hits: t.history_hits,
-            triangle_hits: t.triangle_hits.clone(),
+            triangle_hits: maps,
             cells,
             direct_replicates: t.direct_replicates,
             direct_rays: t.direct_rays,
@@ -152,7 +159,7 @@ impl SavedTallies {
             rays: self.rays,
             killed_by_bounce_cap: self.killed_by_bounce_cap,
             history_hits: self.history_hits,
-            triangle_hits: self.triangle_hits.clone(),
+            triangle_hits: self.triangle_hits.clone().into_owned(),
             cells: unpack_cells(&self.cells.0)?,
             direct_replicates: self.direct_replicates,
             direct_rays: self.direct_rays,
@@ -258,9 +265,42 @@ impl<'de> Deserialize<'de> for Bytes {
     }
 }
 
-/// Everything a checkpoint file holds.
+/// Passes bytes on to `out`, counting them and their CRC-32; keeps the first I/O error
+/// (postcard reports its own).
+struct CrcWriter<W> {
+    out: W,
+    crc: crc32fast::Hasher,
+    bytes: u64,
+    error: Option<std::io::Error>,
+}
+
+impl<W: Write> Write for CrcWriter<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        match self.out.write(buf) {
+            Ok(n) => {
+                self.crc.update(&buf[..n]);
+                self.bytes += n as u64;
+                Ok(n)
+            }
+            Err(e) => {
+                let kind = e.kind();
+                if kind != std::io::ErrorKind::Interrupted {
+                    self.error.get_or_insert(e);
+                }
+                Err(kind.into())
+            }
+        }
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.out.flush()
+    }
+}
+
+/// Everything a checkpoint file holds (`'a`: the run's tallies, when it borrows them;
+/// a checkpoint read from a file owns everything).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Checkpoint {
+pub struct Checkpoint<'a> {
     /// The scene file, for `merge` (which loads it again and checks the fingerprint).
     pub scene_path: String,
     pub scene_fingerprint: u64,
@@ -270,7 +310,7 @@ pub struct Checkpoint {
     pub shard: Option<ShardRange>,
     /// The run stopped on a criterion (not interrupted).
     pub finished: bool,
-    tallies: SavedTallies,
+    tallies: SavedTallies<'a>,
     direct_per_photon: f64,
     history: Vec<SavedPoint>,
     /// Seconds: photon pass, statistics, merging, direct light.
@@ -278,19 +318,23 @@ pub struct Checkpoint {
     chunks: Vec<ChunkRecord>,
 }
 
-impl Checkpoint {
-    /// The checkpoint of a run's state after an epoch.
-    pub fn of(state: &RunState<'_>, scene_fingerprint: u64) -> Checkpoint {
-        let (mut c, cells) = Checkpoint::deferred(state, scene_fingerprint);
-        c.tallies.cells = Bytes(pack_cells(&cells));
+impl<'a> Checkpoint<'a> {
+    /// The checkpoint of a run's state after an epoch, borrowing its triangle maps.
+    pub fn of(state: &RunState<'a>, scene_fingerprint: u64) -> Checkpoint<'a> {
+        let maps = Cow::Borrowed(&state.tallies.triangle_hits);
+        let mut c = Checkpoint::unpacked(state, scene_fingerprint, maps);
+        c.tallies.cells = Bytes(pack_cells(&state.tallies.cells));
         c
     }
 
-    /// [`Checkpoint::of`] with the cells still to pack (a copy, for another thread).
-    fn deferred(state: &RunState<'_>, scene_fingerprint: u64) -> (Checkpoint, Vec<CellSums>) {
-        let t = state.tallies;
-        let tallies = SavedTallies::of(t, Bytes(Vec::new()));
-        let c = Checkpoint {
+    /// [`Checkpoint::of`] with the triangle maps `maps` and the cells still to pack.
+    fn unpacked(
+        state: &RunState<'_>,
+        scene_fingerprint: u64,
+        maps: Cow<'a, crate::tally::TriangleCounts>,
+    ) -> Checkpoint<'a> {
+        let tallies = SavedTallies::of(state.tallies, maps, Bytes(Vec::new()));
+        Checkpoint {
             scene_path: state.scene.path.display().to_string(),
             scene_fingerprint,
             numbers: Numbers::of(state.options),
@@ -309,8 +353,18 @@ impl Checkpoint {
                 state.direct_s,
             ],
             chunks: state.resumable.chunks.to_vec(),
-        };
-        (c, t.cells.clone())
+        }
+    }
+
+    /// [`Checkpoint::of`] owning a copy of everything, with the cells still to pack: for
+    /// another thread to pack and write while the run goes on.
+    fn deferred(
+        state: &RunState<'_>,
+        scene_fingerprint: u64,
+    ) -> (Checkpoint<'static>, Vec<CellSums>) {
+        let maps = Cow::Owned(state.tallies.triangle_hits.clone());
+        let c = Checkpoint::unpacked(state, scene_fingerprint, maps);
+        (c, state.tallies.cells.clone())
     }
 
     /// Photons traced so far (a shard's own).
@@ -347,24 +401,41 @@ impl Checkpoint {
         Ok(())
     }
 
+    /// The file's bytes, in memory.
     pub fn encode(&self) -> Result<Vec<u8>> {
-        // The payload is serialised straight after the header (length and checksum
-        // filled in after): one copy of the maps' bytes in memory, not two.
-        let mut header = Vec::with_capacity(HEADER_BYTES);
-        header.extend_from_slice(MAGIC);
-        header.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-        header.resize(HEADER_BYTES, 0);
-        let mut bytes = postcard::to_extend(self, header)
+        let mut out = std::io::Cursor::new(Vec::new());
+        self.write_to(&mut out)
             .map_err(|e| Error::Unsupported(format!("checkpoint: {e}")))?;
-        let payload_len = (bytes.len() - HEADER_BYTES) as u64;
-        let crc = crc32fast::hash(&bytes[HEADER_BYTES..]);
-        bytes[12..20].copy_from_slice(&payload_len.to_le_bytes());
-        bytes[20..24].copy_from_slice(&crc.to_le_bytes());
-        Ok(bytes)
+        Ok(out.into_inner())
+    }
+
+    /// Writes the file to `out` from its start: the header, the payload streamed out
+    /// (no copy of the maps' bytes in memory), then the payload's length and CRC in the
+    /// header. Returns the bytes written.
+    fn write_to(&self, out: &mut (impl Write + Seek)) -> std::io::Result<u64> {
+        let mut header = [0u8; HEADER_BYTES];
+        header[..8].copy_from_slice(MAGIC);
+        header[8..12].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
+        out.write_all(&header)?;
+        let mut payload = CrcWriter {
+            out: &mut *out,
+            crc: crc32fast::Hasher::new(),
+            bytes: 0,
+            error: None,
+        };
+        if let Err(e) = postcard::to_io(self, &mut payload) {
+            return Err(payload.error.unwrap_or_else(|| std::io::Error::other(e)));
+        }
+        let (bytes, crc) = (payload.bytes, payload.crc.finalize());
+        out.seek(SeekFrom::Start(12))?;
+        out.write_all(&bytes.to_le_bytes())?;
+        out.write_all(&crc.to_le_bytes())?;
+        out.seek(SeekFrom::End(0))?;
+        Ok(HEADER_BYTES as u64 + bytes)
     }
 
     /// Reads a checkpoint; `origin` names it in errors.
-    pub fn decode(bytes: &[u8], origin: &str) -> Result<Checkpoint> {
+    pub fn decode(bytes: &[u8], origin: &str) -> Result<Checkpoint<'static>> {
         let bad = |m: String| Err(Error::input(origin, m));
         if bytes.len() < 8 || &bytes[..8] != MAGIC {
             return bad("not a luxtally checkpoint".into());
@@ -398,15 +469,15 @@ impl Checkpoint {
     /// old checkpoint renamed to checkpoint.prev, the new one renamed into place, the
     /// directory synced. Returns the bytes written.
     pub fn save(&self, dir: &Path) -> Result<u64> {
-        let bytes = self.encode()?;
         let path = dir.join(FILE);
         let tmp = dir.join(format!("{FILE}.tmp"));
-        let write = || -> std::io::Result<()> {
-            let mut f = std::fs::File::create(&tmp)?;
-            f.write_all(&bytes)?;
-            f.sync_all()
+        let write = || -> std::io::Result<u64> {
+            let mut f = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(&tmp)?);
+            let bytes = self.write_to(&mut f)?;
+            f.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+            Ok(bytes)
         };
-        write().map_err(|e| Error::io(&tmp, e))?;
+        let bytes = write().map_err(|e| Error::io(&tmp, e))?;
         if path.exists() {
             let prev = dir.join(PREVIOUS_FILE);
             std::fs::rename(&path, &prev).map_err(|e| Error::io(&prev, e))?;
@@ -415,12 +486,12 @@ impl Checkpoint {
         if let Ok(d) = std::fs::File::open(dir) {
             let _ = d.sync_all();
         }
-        Ok(bytes.len() as u64)
+        Ok(bytes)
     }
 
     /// Reads `dir/checkpoint.bin` (or checkpoint.prev when a save was cut between its
     /// two renames).
-    pub fn load(dir: &Path) -> Result<(Checkpoint, PathBuf)> {
+    pub fn load(dir: &Path) -> Result<(Checkpoint<'static>, PathBuf)> {
         let mut path = dir.join(FILE);
         if !path.exists() && dir.join(PREVIOUS_FILE).exists() {
             path = dir.join(PREVIOUS_FILE);
@@ -543,7 +614,8 @@ impl Checkpointer {
         Ok(())
     }
 
-    /// Saves if due (or on the last epoch, then waiting until it is on disk).
+    /// Saves if due (or on the last epoch, then waiting until it is on disk: written
+    /// from the run's own tallies, without the copy a save on another thread needs).
     pub fn epoch(&mut self, state: &RunState<'_>) -> Result<()> {
         let last = state.stop_reason.is_some();
         if !last && self.last.elapsed().as_secs_f64() < self.period_s {
@@ -551,6 +623,19 @@ impl Checkpointer {
         }
         self.finish_pending()?;
         let t = Instant::now();
+        if last {
+            let bytes = Checkpoint::of(state, self.fingerprint).save(&self.dir)?;
+            let seconds = t.elapsed().as_secs_f64();
+            self.total_s += seconds;
+            self.saves += 1;
+            self.last_cost = Some(SaveCost {
+                waited_s: seconds,
+                written_s: seconds,
+                bytes,
+            });
+            self.last = Instant::now();
+            return Ok(());
+        }
         let (mut c, cells) = Checkpoint::deferred(state, self.fingerprint);
         let dir = self.dir.clone();
         let handle = std::thread::spawn(move || {
@@ -567,9 +652,6 @@ impl Checkpointer {
             writer: handle,
             copy_s,
         });
-        if last {
-            self.finish_pending()?;
-        }
         self.last = Instant::now();
         Ok(())
     }
@@ -754,6 +836,7 @@ mod tests {
 
     #[test]
     fn a_damaged_checkpoint_is_refused_in_one_line() {
+        let t = Tallies::new(2, 3);
         let c = Checkpoint {
             scene_path: "s.toml".into(),
             scene_fingerprint: 7,
@@ -765,10 +848,11 @@ mod tests {
             photons_goal: Some(10),
             shard: None,
             finished: false,
-            tallies: {
-                let t = Tallies::new(2, 3);
-                SavedTallies::of(&t, Bytes(pack_cells(&t.cells)))
-            },
+            tallies: SavedTallies::of(
+                &t,
+                Cow::Borrowed(&t.triangle_hits),
+                Bytes(pack_cells(&t.cells)),
+            ),
             direct_per_photon: 0.25,
             history: vec![],
             times_s: [1.0; 4],

@@ -57,6 +57,15 @@ impl VertexFaces {
                 representative[i as usize] = run[0];
             }
         }
+        drop(order);
+        if representative
+            .iter()
+            .enumerate()
+            .all(|(i, &r)| r as usize == i)
+        {
+            // Every vertex at its own point: the plain rows, without the mapping's memory.
+            return Self::new(triangles, vertices.len());
+        }
         let mut rows = Self::rows(triangles, vertices.len(), |i| representative[i as usize]);
         rows.representative = Some(representative);
         rows
