@@ -3,36 +3,17 @@
 //! switch is process-wide, so its cases must not run concurrently.
 
 use luxtally::accel::embree::EmbreeScene;
-use luxtally::accel::huge_pages::{wait_for_collapse, DEFER_FROM_TRIANGLES};
+use luxtally::accel::huge_pages::{
+    huge_pages_enabled, set_huge_pages, wait_for_collapse, DEFER_FROM_TRIANGLES,
+};
 use luxtally::bench::procedural_geometry;
 
 fn huge_pages_disabled() -> bool {
-    // SAFETY: PR_GET_THP_DISABLE reads a flag of this process.
-    let flag = unsafe {
-        libc::prctl(
-            libc::PR_GET_THP_DISABLE,
-            0 as libc::c_ulong,
-            0 as libc::c_ulong,
-            0 as libc::c_ulong,
-            0 as libc::c_ulong,
-        )
-    };
-    assert!(flag >= 0, "prctl(PR_GET_THP_DISABLE) failed");
-    flag == 1
+    !huge_pages_enabled()
 }
 
 fn set_huge_pages_disabled(off: bool) {
-    // SAFETY: PR_SET_THP_DISABLE sets a flag of this process.
-    let rc = unsafe {
-        libc::prctl(
-            libc::PR_SET_THP_DISABLE,
-            libc::c_ulong::from(off),
-            0 as libc::c_ulong,
-            0 as libc::c_ulong,
-            0 as libc::c_ulong,
-        )
-    };
-    assert_eq!(rc, 0, "prctl(PR_SET_THP_DISABLE) failed");
+    assert!(set_huge_pages(!off), "prctl(PR_SET_THP_DISABLE) failed");
 }
 
 /// Bytes of the process's anonymous memory in huge pages.

@@ -21,6 +21,8 @@ use std::time::Instant;
 /// more); smaller ones fault them in at once, which costs little.
 pub const DEFER_FROM_TRIANGLES: usize = 1 << 20;
 
+pub use sys::{huge_pages_enabled, set_huge_pages};
+
 /// What the background collapse did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Collapse {
@@ -88,10 +90,19 @@ fn collapse_now() -> Collapse {
     let regions = std::fs::read_to_string("/proc/self/smaps")
         .map(|text| huge_page_regions(&text))
         .unwrap_or_default();
+    // In steps cut at multiples of 32 MiB (so no huge page straddles two), so that one
+    // step the kernel cannot collapse (no free huge page at the moment, a page busy)
+    // costs only its own part; each step is tried twice.
+    const STEP: usize = 32 << 20;
+    let next_cut = |s: usize| (s / STEP + 1) * STEP;
     let bytes_collapsed = regions
         .iter()
-        .filter(|&&(lo, hi)| sys::collapse(lo, hi - lo))
-        .map(|&(lo, hi)| (hi - lo) as u64)
+        .flat_map(|&(lo, hi)| {
+            std::iter::successors(Some(lo), move |&s| Some(next_cut(s)).filter(|&n| n < hi))
+                .map(move |s| (s, next_cut(s).min(hi) - s))
+        })
+        .filter(|&(start, bytes)| sys::collapse(start, bytes) || sys::collapse(start, bytes))
+        .map(|(_, bytes)| bytes as u64)
         .sum();
     Collapse {
         regions: regions.len(),
@@ -142,7 +153,8 @@ mod sys {
         }
     }
 
-    /// Turns the process's transparent huge pages on or off: whether that took.
+    /// Turns the process's transparent huge pages on or off (for the whole process, and
+    /// inherited by its children): whether that took.
     pub fn set_huge_pages(on: bool) -> bool {
         // SAFETY: PR_SET_THP_DISABLE sets a flag of the calling process.
         unsafe {
