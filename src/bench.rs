@@ -452,14 +452,19 @@ impl RaySets {
 }
 
 /// Builds a backend, timing it and the RSS it adds: (backend, a note for the table).
+/// Returns once the BVH's huge pages are in place, so that rays measured next are
+/// steady-state rays.
 fn timed_build<T>(name: &str, build: impl FnOnce() -> Result<T>) -> Result<(T, String)> {
     let (rss0, _) = memory_mib();
     let start = Instant::now();
     let built = build()?;
     let seconds = start.elapsed().as_secs_f64();
+    let collapse = crate::accel::huge_pages::wait_for_collapse()
+        .map(|c| format!(", huge pages {:.3} s after", c.seconds))
+        .unwrap_or_default();
     let (rss1, hwm1) = memory_mib();
     let note = format!(
-        "{name} build {seconds:.3} s, +{:.0} MiB RSS (process peak {hwm1:.0} MiB)",
+        "{name} build {seconds:.3} s{collapse}, +{:.0} MiB RSS (process peak {hwm1:.0} MiB)",
         rss1 - rss0
     );
     Ok((built, note))
@@ -577,6 +582,8 @@ pub fn bench_photons(
     use crate::scene::Estimator;
     use std::sync::atomic::AtomicBool;
     let caster = crate::accel::build(backend, &scene.geometry)?;
+    // Steady-state rays: after the BVH's huge pages are in place.
+    crate::accel::huge_pages::wait_for_collapse();
     let (lo, hi) = local_bounds(&scene.geometry);
     let chunks = split(&random_rays(lo, hi, 500_000, 7), CHUNK);
     let mut out = String::new();

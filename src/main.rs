@@ -302,6 +302,7 @@ fn run_options(args: &RunArgs, scene: &Scene) -> Result<RunOptions> {
             return Err(Error::input("--threads", "must be at least 1"));
         }
         options.threads = threads;
+        luxtally::run::limit_global_threads(threads);
     }
     if let Some(b) = &args.backend {
         options.backend = b.parse::<Backend>()?;
@@ -592,6 +593,7 @@ fn merge_command(
     };
     if let Some(t) = threads {
         options.threads = t.max(1);
+        luxtally::run::limit_global_threads(options.threads);
     }
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let setup = Instant::now();

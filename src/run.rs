@@ -106,6 +106,15 @@ pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
         .map_err(|e| Error::Unsupported(format!("cannot start {threads} threads: {e}")))
 }
 
+/// Makes rayon's global pool `threads` wide, so that work outside a run's own pool
+/// (writing the outputs, merging shards) keeps to `--threads` as well; only the
+/// process's first call counts.
+pub fn limit_global_threads(threads: usize) {
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build_global();
+}
+
 /// The state of a run after an epoch.
 pub struct RunState<'a> {
     pub scene: &'a Scene,

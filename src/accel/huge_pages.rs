@@ -2,18 +2,21 @@
 //!
 //! Embree asks the kernel for transparent huge pages (`madvise(MADV_HUGEPAGE)`) for all it
 //! allocates: its BVH and its temporary build arrays (98 B per triangle at the build's
-//! peak, 66 of them the BVH). Rays through a BVH of 10⁷ triangles in 2 MiB pages run
-//! ≈ 25 % faster than in 4 KiB pages (fewer TLB misses), but a fresh huge page is slow to
-//! fault in where freed memory goes back to a hypervisor (free page reporting: measured
-//! 0.7 GB/s on this project's VM, 1–3 s of a 10⁷-triangle build). So a large build runs
-//! with huge pages off for the process (`PR_SET_THP_DISABLE`: recycled 4 KiB pages, for
-//! the temporary arrays too), and afterwards a background thread collapses what is left
-//! of the memory Embree asked huge pages for — the BVH — into huge pages
-//! (`MADV_COLLAPSE`, Linux ≥ 6.1) while the first photons trace. Rays are right either
-//! way: collapsing moves pages, never their contents. Where the process already had huge
-//! pages off, or the kernel cannot collapse, nothing changes.
+//! peak, 66 of them the BVH). In 4 KiB pages, rays through a BVH of 10⁷ triangles lose
+//! about a quarter of their rate (TLB misses), but a fresh huge page is slow to fault in
+//! where freed memory goes back to a hypervisor (free page reporting: measured 0.7 GB/s
+//! on this project's VM, 1–3 s of a 10⁷-triangle build). So a large build runs with huge
+//! pages off for the process (`PR_SET_THP_DISABLE`: recycled 4 KiB pages, for the
+//! temporary arrays too), and afterwards a background thread collapses what is left of
+//! the memory Embree asked huge pages for — the BVH — into huge pages (`MADV_COLLAPSE`,
+//! Linux ≥ 6.1) while the first photons trace. Rays are right either way: collapsing
+//! moves pages, never their contents. Where the process already had huge pages off, or
+//! the kernel cannot collapse (checked once, on a scratch page), nothing changes.
+//!
+//! The module's `unsafe` (two `prctl`s, `madvise`, `mmap`) is the one exception to
+//! "`unsafe` only in the Embree wrapper": it is about Embree's memory, not its API.
 
-use std::sync::Mutex;
+use std::sync::{Mutex, OnceLock};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
@@ -26,16 +29,25 @@ pub use sys::{huge_pages_enabled, set_huge_pages};
 /// What the background collapse did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Collapse {
-    /// Regions that asked for huge pages, and the bytes in those the kernel collapsed.
+    /// Regions of the process that had asked for huge pages.
     pub regions: usize,
-    pub bytes_collapsed: u64,
+    /// The process's anonymous memory in huge pages once done (`AnonHugePages`), bytes.
+    pub huge_bytes: u64,
     /// Wall seconds the collapse took.
     pub seconds: f64,
 }
 
-/// Builds in progress with huge pages off, and whether the first of them turned them off
-/// (it stays off until the last one ends).
-static DEFERRING: Mutex<(usize, bool)> = Mutex::new((0, false));
+/// The guards alive, and whether the first of them turned huge pages off (they stay off
+/// until the last one ends).
+struct Deferring {
+    builds: usize,
+    turned_off: bool,
+}
+
+static DEFERRING: Mutex<Deferring> = Mutex::new(Deferring {
+    builds: 0,
+    turned_off: false,
+});
 
 /// The collapse still running, if any.
 static PENDING: Mutex<Option<JoinHandle<Collapse>>> = Mutex::new(None);
@@ -46,13 +58,15 @@ static PENDING: Mutex<Option<JoinHandle<Collapse>>> = Mutex::new(None);
 pub struct Deferred(());
 
 impl Deferred {
-    /// Turns huge pages off unless the process had them off already.
+    /// Turns huge pages off unless the process had them off already or the kernel could
+    /// not collapse them back.
     pub fn new() -> Deferred {
         let mut state = DEFERRING.lock().unwrap_or_else(|e| e.into_inner());
-        if state.0 == 0 {
-            state.1 = sys::huge_pages_enabled() && sys::set_huge_pages(false);
+        if state.builds == 0 {
+            state.turned_off =
+                sys::huge_pages_enabled() && can_collapse() && sys::set_huge_pages(false);
         }
-        state.0 += 1;
+        state.builds += 1;
         Deferred(())
     }
 }
@@ -66,8 +80,8 @@ impl Default for Deferred {
 impl Drop for Deferred {
     fn drop(&mut self) {
         let mut state = DEFERRING.lock().unwrap_or_else(|e| e.into_inner());
-        state.0 -= 1;
-        if state.0 == 0 && std::mem::take(&mut state.1) && sys::set_huge_pages(true) {
+        state.builds -= 1;
+        if state.builds == 0 && std::mem::take(&mut state.turned_off) && sys::set_huge_pages(true) {
             let previous = PENDING
                 .lock()
                 .unwrap_or_else(|e| e.into_inner())
@@ -84,6 +98,12 @@ pub fn wait_for_collapse() -> Option<Collapse> {
     handle.join().ok()
 }
 
+/// Whether this kernel collapses memory into huge pages on request (tried once).
+pub fn can_collapse() -> bool {
+    static CAN: OnceLock<bool> = OnceLock::new();
+    *CAN.get_or_init(sys::collapse_works)
+}
+
 /// Collapses every region of the process that asked for huge pages.
 fn collapse_now() -> Collapse {
     let start = Instant::now();
@@ -95,20 +115,28 @@ fn collapse_now() -> Collapse {
     // costs only its own part; each step is tried twice.
     const STEP: usize = 32 << 20;
     let next_cut = |s: usize| (s / STEP + 1) * STEP;
-    let bytes_collapsed = regions
-        .iter()
-        .flat_map(|&(lo, hi)| {
-            std::iter::successors(Some(lo), move |&s| Some(next_cut(s)).filter(|&n| n < hi))
-                .map(move |s| (s, next_cut(s).min(hi) - s))
-        })
-        .filter(|&(start, bytes)| sys::collapse(start, bytes) || sys::collapse(start, bytes))
-        .map(|(_, bytes)| bytes as u64)
-        .sum();
+    for (lo, hi) in &regions {
+        let steps = std::iter::successors(Some(*lo), |&s| Some(next_cut(s)).filter(|n| n < hi));
+        for s in steps {
+            let bytes = next_cut(s).min(*hi) - s;
+            let _ = sys::collapse(s, bytes) || sys::collapse(s, bytes);
+        }
+    }
     Collapse {
         regions: regions.len(),
-        bytes_collapsed,
+        huge_bytes: anon_huge_bytes(),
         seconds: start.elapsed().as_secs_f64(),
     }
+}
+
+/// The process's anonymous memory in huge pages (`AnonHugePages` of
+/// `/proc/self/smaps_rollup`), bytes; 0 where unknown.
+pub fn anon_huge_bytes() -> u64 {
+    let text = std::fs::read_to_string("/proc/self/smaps_rollup").unwrap_or_default();
+    text.lines()
+        .find_map(|l| l.strip_prefix("AnonHugePages:"))
+        .and_then(|v| v.split_whitespace().next()?.parse::<u64>().ok())
+        .map_or(0, |kib| kib * 1024)
 }
 
 /// The address ranges (start, end) of `/proc/self/smaps` whose flags include `hg`
@@ -139,40 +167,54 @@ pub fn huge_page_regions(smaps: &str) -> Vec<(usize, usize)> {
 
 #[cfg(target_os = "linux")]
 mod sys {
+    const NONE: libc::c_ulong = 0;
+
     /// Whether the process may use transparent huge pages (not `PR_SET_THP_DISABLE`d).
     pub fn huge_pages_enabled() -> bool {
         // SAFETY: PR_GET_THP_DISABLE reads a flag of the calling process.
-        unsafe {
-            libc::prctl(
-                libc::PR_GET_THP_DISABLE,
-                0 as libc::c_ulong,
-                0 as libc::c_ulong,
-                0 as libc::c_ulong,
-                0 as libc::c_ulong,
-            ) == 0
-        }
+        unsafe { libc::prctl(libc::PR_GET_THP_DISABLE, NONE, NONE, NONE, NONE) == 0 }
     }
 
-    /// Turns the process's transparent huge pages on or off (for the whole process, and
-    /// inherited by its children): whether that took.
+    /// Turns the process's transparent huge pages on or off (the whole process, and the
+    /// children it starts): whether that took. A [`super::Deferred`] alive meanwhile
+    /// sets them back as it found them when it ends.
     pub fn set_huge_pages(on: bool) -> bool {
+        let off = libc::c_ulong::from(!on);
         // SAFETY: PR_SET_THP_DISABLE sets a flag of the calling process.
-        unsafe {
-            libc::prctl(
-                libc::PR_SET_THP_DISABLE,
-                libc::c_ulong::from(!on),
-                0 as libc::c_ulong,
-                0 as libc::c_ulong,
-                0 as libc::c_ulong,
-            ) == 0
-        }
+        unsafe { libc::prctl(libc::PR_SET_THP_DISABLE, off, NONE, NONE, NONE) == 0 }
     }
 
     /// Asks the kernel to back `bytes` from `start` with huge pages now.
     pub fn collapse(start: usize, bytes: usize) -> bool {
-        // SAFETY: MADV_COLLAPSE neither changes the contents of the range nor frees it;
-        // a range unmapped meanwhile only makes the call fail.
+        // SAFETY: MADV_COLLAPSE never changes the contents of memory, only the pages
+        // behind it; a range unmapped meanwhile fails the call, one mapped anew is
+        // collapsed with its contents kept.
         unsafe { libc::madvise(start as *mut libc::c_void, bytes, libc::MADV_COLLAPSE) == 0 }
+    }
+
+    /// Collapses one touched page of a scratch mapping: whether the kernel can.
+    pub fn collapse_works() -> bool {
+        const HUGE: usize = 2 << 20;
+        let len = 2 * HUGE;
+        // SAFETY: a private anonymous mapping of our own, written and unmapped here only.
+        unsafe {
+            let map = libc::mmap(
+                std::ptr::null_mut(),
+                len,
+                libc::PROT_READ | libc::PROT_WRITE,
+                libc::MAP_PRIVATE | libc::MAP_ANONYMOUS,
+                -1,
+                0,
+            );
+            if map == libc::MAP_FAILED {
+                return false;
+            }
+            let aligned = (map as usize).next_multiple_of(HUGE);
+            (aligned as *mut u8).write(1);
+            let works = collapse(aligned, HUGE);
+            libc::munmap(map, len);
+            works
+        }
     }
 }
 
@@ -185,6 +227,9 @@ mod sys {
         false
     }
     pub fn collapse(_start: usize, _bytes: usize) -> bool {
+        false
+    }
+    pub fn collapse_works() -> bool {
         false
     }
 }

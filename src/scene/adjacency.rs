@@ -64,6 +64,7 @@ impl VertexFaces {
             .all(|(i, &r)| r as usize == i)
         {
             // Every vertex at its own point: the plain rows, without the mapping's memory.
+            drop(representative);
             return Self::new(triangles, vertices.len());
         }
         let mut rows = Self::rows(triangles, vertices.len(), |i| representative[i as usize]);

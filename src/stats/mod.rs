@@ -744,6 +744,45 @@ mod tests {
     }
 
     #[test]
+    fn cell_statistics_are_the_same_bits_on_one_thread_and_on_two() {
+        // 200 × 100 cells (several rayon tasks) of varied sums, some empty.
+        let mut rng = crate::rng::aux_stream(5);
+        let cells: Vec<CellSums> = (0..20_000)
+            .map(|k| {
+                let mut c = CellSums::default();
+                if k % 7 != 0 {
+                    for _ in 0..1 + k % 5 {
+                        let x = crate::sampling::uniform(&mut rng);
+                        let mut p = 1.0;
+                        for m in &mut c.moments {
+                            p *= x;
+                            m.add(p);
+                        }
+                        c.hits += 1;
+                    }
+                }
+                c
+            })
+            .collect();
+        let counts = Counts {
+            photons: 1000,
+            direct_replicates: 0,
+            dark: false,
+        };
+        let on = |threads| {
+            let pool = crate::run::thread_pool(threads).unwrap();
+            pool.install(|| cell_values(&cells, [200, 100], counts))
+        };
+        let bits = |(v, s): (Vec<f64>, Vec<f64>)| {
+            v.iter()
+                .chain(&s)
+                .map(|x| x.to_bits())
+                .collect::<Vec<u64>>()
+        };
+        assert_eq!(bits(on(1)), bits(on(2)));
+    }
+
+    #[test]
     fn mean_error_uses_both_averagings() {
         let (mean, rel) = mean_error(&[1.0, 3.0], &[0.1, 0.1]);
         assert_eq!(mean, 2.0);
