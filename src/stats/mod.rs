@@ -240,26 +240,36 @@ pub struct Averaged {
 /// Receiver (or block) summary per eq. 9: the arithmetic mean value and the RMS σ over
 /// the mean by arithmetic and quadratic averaging of the values.
 pub fn mean_error(values: &[f64], sigmas: &[f64]) -> (f64, Averaged) {
-    if values.is_empty() {
-        return (
-            0.0,
-            Averaged {
-                arithmetic: f64::NAN,
-                quadratic: f64::NAN,
-            },
-        );
+    let (mean, rel, _) = mean_error_of(values.iter().copied().zip(sigmas.iter().copied()));
+    (mean, rel)
+}
+
+/// [`mean_error`] over (value, σ) pairs, with the RMS σ: one pass, no arrays (a receiver
+/// of 10⁶ cells is summarised after every epoch). Each sum is taken in the pairs' order.
+fn mean_error_of(pairs: impl Iterator<Item = (f64, f64)>) -> (f64, Averaged, f64) {
+    let (mut k, mut sum, mut sum_sq, mut sigma_sq) = (0usize, -0.0f64, -0.0f64, -0.0f64);
+    for (v, sigma) in pairs {
+        k += 1;
+        sum += v;
+        sum_sq += v * v;
+        sigma_sq += sigma * sigma;
     }
-    let k = values.len() as f64;
-    let mean = values.iter().sum::<f64>() / k;
-    let quadratic_mean = (values.iter().map(|v| v * v).sum::<f64>() / k).sqrt();
-    let rms_sigma = (sigmas.iter().map(|s| s * s).sum::<f64>() / k).sqrt();
-    (
-        mean,
-        Averaged {
-            arithmetic: relative_error(mean, rms_sigma),
-            quadratic: relative_error(quadratic_mean, rms_sigma),
-        },
-    )
+    if k == 0 {
+        let unknown = Averaged {
+            arithmetic: f64::NAN,
+            quadratic: f64::NAN,
+        };
+        return (0.0, unknown, 0.0);
+    }
+    let k = k as f64;
+    let mean = sum / k;
+    let quadratic_mean = (sum_sq / k).sqrt();
+    let rms_sigma = (sigma_sq / k).sqrt();
+    let rel = Averaged {
+        arithmetic: relative_error(mean, rms_sigma),
+        quadratic: relative_error(quadratic_mean, rms_sigma),
+    };
+    (mean, rel, rms_sigma)
 }
 
 /// Values, errors and hits of one receiver.
@@ -339,21 +349,10 @@ pub fn receiver_stats(
             s.hits = picked.iter().map(|&k| cells[k].hits).collect();
         }
     }
-    let n = s.values.len();
-    (s.mean, s.rel_error) = mean_error(&s.values, &s.sigma);
-    let (known_values, known_sigma): (Vec<f64>, Vec<f64>) = s
-        .values
-        .iter()
-        .zip(&s.sigma)
-        .filter(|(_, sigma)| !sigma.is_nan())
-        .unzip();
-    s.unknown_cells = n - known_values.len();
-    s.rel_error_known = mean_error(&known_values, &known_sigma).1;
-    s.rms_sigma = if n == 0 {
-        0.0
-    } else {
-        (s.sigma.iter().map(|x| x * x).sum::<f64>() / n as f64).sqrt()
-    };
+    let pairs = || s.values.iter().copied().zip(s.sigma.iter().copied());
+    (s.mean, s.rel_error, s.rms_sigma) = mean_error_of(pairs());
+    s.rel_error_known = mean_error_of(pairs().filter(|(_, sigma)| !sigma.is_nan())).1;
+    s.unknown_cells = s.sigma.iter().filter(|sigma| sigma.is_nan()).count();
     s
 }
 

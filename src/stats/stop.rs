@@ -136,9 +136,14 @@ pub fn receiver_target_error(
     let Some(index) = target.receiver() else {
         return f64::INFINITY;
     };
-    let cell_ids = target.cells(receivers);
-    let stats = receiver_stats(cells, receivers[index].cells, counts, Some(&cell_ids));
-    if cell_ids.is_empty() || stats.unknown_cells > 0 {
+    // A whole receiver needs no list of its cells (10⁶ indices and three gathers per
+    // epoch on a large one).
+    let picked = match target {
+        Target::Receiver { .. } => None,
+        _ => Some(target.cells(receivers)),
+    };
+    let stats = receiver_stats(cells, receivers[index].cells, counts, picked.as_deref());
+    if stats.values.is_empty() || stats.unknown_cells > 0 {
         return f64::INFINITY;
     }
     match (target, absolute) {
