@@ -19,7 +19,7 @@ pub mod emit;
 pub mod receiver;
 pub mod scatter;
 
-use crate::accel::{HitBatch, RayBatch, RayCaster};
+use crate::accel::{HitBatch, RayBatch, RayCaster, Surface};
 use crate::rng::photon_stream;
 use crate::sampling::{cosine_from_square, uniform_f32};
 use crate::scene::{Estimator, Geometry, Scene};
@@ -55,6 +55,9 @@ pub fn bounce_cap(max_albedo: f64) -> u32 {
 pub struct Tracer<'a> {
     caster: &'a dyn RayCaster,
     geometry: &'a Geometry,
+    /// Per mapped triangle, what a hit on it needs ([`TriangleSurface`]); empty for
+    /// scenes above [`SURFACE_TABLE_MAX_TRIANGLES`].
+    surface_table: Vec<TriangleSurface>,
     /// BSDF and its bounce flags per material.
     surfacings: Vec<Surfacing>,
     pub emitters: Emitters,
@@ -68,6 +71,11 @@ pub struct Tracer<'a> {
     pub receiver_slack: f64,
     /// Some receiver connects scattering vertices to itself.
     any_connects: bool,
+    /// No receiver connects and every material is a grey Lambertian reflector (the
+    /// office, the procedural scene): the hit pass runs its loop without the
+    /// connection and the general scattering, a loop small enough to keep its state in
+    /// registers.
+    lambert_track: bool,
 }
 
 /// Per-worker buffers, reused from chunk to chunk (their contents never affect results).
@@ -216,6 +224,45 @@ impl<'a> SurvivorLanes<'a> {
     }
 }
 
+/// Scenes up to this many triangles get a [`TriangleSurface`] table (≤ 2.6 MB): on a
+/// small scene the hit's surface lookup is a chain of dependent loads (triangle →
+/// vertex indices → vertices) that dominates the tracer's own work; on a large one the
+/// table would cost 40 B per triangle, against the memory goal, where cache misses in
+/// the ray caster dominate anyway.
+pub const SURFACE_TABLE_MAX_TRIANGLES: usize = 1 << 16;
+
+/// A triangle's first vertex, its two edges from it and its material: the hit point is
+/// `a + e1·u + e2·v`, the same f32 operations in the same order as
+/// [`crate::accel::HitBatch::surface`]'s `a + (b − a)·u + (c − a)·v`, so the same bits,
+/// one load from the triangle id instead of two dependent ones.
+#[derive(Clone, Copy, Debug)]
+struct TriangleSurface {
+    a: Vec3,
+    e1: Vec3,
+    e2: Vec3,
+    material: u32,
+}
+
+impl TriangleSurface {
+    /// The table for `g`, or an empty one above [`SURFACE_TABLE_MAX_TRIANGLES`].
+    fn table(g: &Geometry) -> Vec<TriangleSurface> {
+        if g.triangle_count() > SURFACE_TABLE_MAX_TRIANGLES {
+            return Vec::new();
+        }
+        (g.triangles.iter().enumerate())
+            .map(|(t, tri)| {
+                let [a, b, c] = tri.map(|i| g.vertices[i as usize]);
+                TriangleSurface {
+                    a,
+                    e1: b - a,
+                    e2: c - a,
+                    material: g.material.get(t),
+                }
+            })
+            .collect()
+    }
+}
+
 /// What the photon pass needs of a material, looked up once per hit: the BSDF and the
 /// flags that decide its path through a bounce, so the common case (a grey Lambertian
 /// reflector) skips the general lobe roulette.
@@ -273,6 +320,11 @@ impl<'a> Tracer<'a> {
             })
             .collect();
         let scene_scale = g.local_scale();
+        let surfacings: Vec<Surfacing> = (scene.materials.iter())
+            .map(|m| Surfacing::new(Bsdf::new(m)))
+            .collect();
+        let any_connects = receivers.iter().any(|r| r.estimator.connects());
+        let lambert_track = !any_connects && surfacings.iter().all(|s| s.lambert_only);
         let max_albedo = scene
             .materials
             .iter()
@@ -281,17 +333,15 @@ impl<'a> Tracer<'a> {
         Tracer {
             caster,
             geometry: g,
-            surfacings: scene
-                .materials
-                .iter()
-                .map(|m| Surfacing::new(Bsdf::new(m)))
-                .collect(),
+            surface_table: TriangleSurface::table(g),
+            surfacings,
             emitters: Emitters::new(scene),
             seed,
             max_bounces: bounce_cap(max_albedo),
             scene_scale,
             receiver_slack: 1e-5 * scene_scale as f64,
-            any_connects: receivers.iter().any(|r| r.estimator.connects()),
+            any_connects,
+            lambert_track,
             receivers,
         }
     }
@@ -388,14 +438,20 @@ impl<'a> Tracer<'a> {
             );
         }
         s.size_bounce_arrays(n);
-        let (survivors, diffuse) = self.hits_pass(s, tally, flux, odd_first);
+        let (survivors, diffuse) = if self.lambert_track {
+            self.hits_pass::<true>(s, tally, flux, odd_first)
+        } else {
+            self.hits_pass::<false>(s, tally, flux, odd_first)
+        };
         self.end_bounce(s, tally, survivors, diffuse);
     }
 
     /// Pass 2 of [`Self::step`]: deposit, connect and play the roulette at each hit,
     /// compacting the survivors in place. Returns how many survive and how many of them
     /// scatter diffusely (their slots in `s.diffuse_slot`).
-    fn hits_pass(
+    /// `LAMBERT_TRACK`: [`Tracer::lambert_track`], which removes the connection and
+    /// the general scattering from the loop at compile time (the same numbers).
+    fn hits_pass<const LAMBERT_TRACK: bool>(
         &self,
         s: &mut Scratch,
         tally: &mut ChunkTally,
@@ -426,8 +482,22 @@ impl<'a> Tracer<'a> {
         // photons absorbed (or stopped by the bounce cap) at this hit; and survivors so
         // far (lane k's successor is written at j ≤ k).
         let (mut escaped, mut ended, mut j) = (0u64, 0u64, 0);
+        // The hits, sliced to the batch: no bounds check in the loop.
+        let (hit_tri, hit_u, hit_v) = (&hits.tri[..n], &hits.u[..n], &hits.v[..n]);
+        let (ngx, ngy, ngz) = (&hits.ngx[..n], &hits.ngy[..n], &hits.ngz[..n]);
         for k in 0..n {
-            let Some(surface) = hits.surface(k, self.geometry) else {
+            let tri = hit_tri[k];
+            let surface = if let Some(row) = self.surface_table.get(tri as usize) {
+                let (u, v) = (hit_u[k], hit_v[k]);
+                Surface {
+                    point: row.a + row.e1 * u + row.e2 * v,
+                    normal: Vec3::new(ngx[k], ngy[k], ngz[k]),
+                    material: row.material,
+                    mapped: Some(tri),
+                }
+            } else if let Some(surface) = hits.surface(k, self.geometry) {
+                surface
+            } else {
                 escaped += 1;
                 continue;
             };
@@ -445,7 +515,7 @@ impl<'a> Tracer<'a> {
             let p = surface.point;
             let facing = if back_face { -normal } else { normal };
             let surfacing = &self.surfacings[surface.material as usize];
-            if self.any_connects && surfacing.connectable {
+            if !LAMBERT_TRACK && self.any_connects && surfacing.connectable {
                 self.connect(
                     p,
                     normal,
@@ -462,7 +532,7 @@ impl<'a> Tracer<'a> {
                 ended += 1;
                 continue;
             }
-            if surfacing.lambert_only {
+            if LAMBERT_TRACK || surfacing.lambert_only {
                 // `Bsdf::sample`'s roulette and diffuse lobe for a material with no other
                 // lobe: the same draws (the direction's in f32 in pass 3, into the hemisphere
                 // the photon arrived from). The slot is written whatever the roulette says

@@ -102,7 +102,7 @@ impl Offset {
     #[inline(always)]
     fn coordinate(self, p: f32, n: f32) -> f32 {
         const INT_SCALE: f32 = 256.0;
-        let of_i = (INT_SCALE * n) as i32;
+        let of_i = trunc_small(INT_SCALE * n);
         let ulps = f32::from_bits((p.to_bits() as i32 + if p < 0.0 { -of_i } else { of_i }) as u32);
         let fixed = p + self.float_scale * n;
         if p.abs() < self.near_origin {
@@ -110,6 +110,23 @@ impl Offset {
         } else {
             ulps
         }
+    }
+}
+
+/// `x as i32` for |x| < 2²¹ (and NaN, which gives 0), in arithmetic the compiler
+/// vectorises: `as` saturates, which it can only do one lane at a time. Adding 1.5·2²³
+/// rounds x to the nearest integer r, whose value the sum's low mantissa bits hold; a
+/// step back toward zero where r lies beyond x makes it the truncation.
+#[inline(always)]
+fn trunc_small(x: f32) -> i32 {
+    const MAGIC: f32 = 12_582_912.0;
+    let r = (x + MAGIC) - MAGIC;
+    let back = ((x >= 0.0) & (r > x)) as i32 - ((x < 0.0) & (r < x)) as i32;
+    let t = (r + MAGIC).to_bits() as i32 - MAGIC.to_bits() as i32 - back;
+    if x.is_nan() {
+        0
+    } else {
+        t
     }
 }
 
@@ -132,6 +149,18 @@ mod tests {
         // Inside glass at 60° from the normal: beyond the critical angle (41.8°).
         let inside = DVec3::new(60f64.to_radians().sin(), 0.0, 60f64.to_radians().cos());
         assert!(refract(inside, -DVec3::Z, 1.5).is_none());
+    }
+
+    #[test]
+    fn trunc_small_is_the_cast_for_every_offset() {
+        // Every f32 in [−256, 256] (the offsets 256·n of unit normals) in steps of 7
+        // bit patterns, the integers and half-integers, ±0 and NaN.
+        let patterns = (0..=256.0f32.to_bits()).step_by(7).map(f32::from_bits);
+        let halves = (-512..=512).map(|k| k as f32 * 0.5);
+        let special = [0.0, -0.0, f32::NAN, 255.99998, -255.99998];
+        for x in patterns.flat_map(|x| [x, -x]).chain(halves).chain(special) {
+            assert_eq!(trunc_small(x), x as i32, "{x}");
+        }
     }
 
     #[test]
