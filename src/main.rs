@@ -302,7 +302,6 @@ fn run_options(args: &RunArgs, scene: &Scene) -> Result<RunOptions> {
             return Err(Error::input("--threads", "must be at least 1"));
         }
         options.threads = threads;
-        luxtally::run::limit_global_threads(threads);
     }
     if let Some(b) = &args.backend {
         options.backend = b.parse::<Backend>()?;
@@ -561,6 +560,7 @@ fn merge_command(
     scene: Option<&Path>,
     threads: Option<usize>,
 ) -> Result<()> {
+    limit_global_threads(threads);
     let mut shards = Vec::new();
     for dir in dirs {
         let (c, path) = Checkpoint::load(dir)?;
@@ -593,7 +593,6 @@ fn merge_command(
     };
     if let Some(t) = threads {
         options.threads = t.max(1);
-        luxtally::run::limit_global_threads(options.threads);
     }
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let setup = Instant::now();
@@ -615,7 +614,16 @@ fn merge_command(
     Ok(())
 }
 
+/// `--threads` for all the process's parallel work (loading, outputs), not only the
+/// photon pass's own pool: set before anything runs in parallel.
+fn limit_global_threads(threads: Option<usize>) {
+    if let Some(t) = threads.filter(|&t| t > 0) {
+        luxtally::run::limit_global_threads(t);
+    }
+}
+
 fn run_command(args: RunArgs) -> Result<()> {
+    limit_global_threads(args.threads);
     let budget = budget_for(&args)?;
     let scene = luxtally::scene::load(&args.scene)?;
     let mut options = run_options(&args, &scene)?;
@@ -662,6 +670,7 @@ fn run_into(
 
 /// `render`: the photon pass (or a saved map with --from), then the eye pass.
 fn render_command(args: RenderArgs) -> Result<()> {
+    limit_global_threads(args.run.threads);
     let budget = budget_for(&args.run)?;
     let mut scene = luxtally::scene::load(&args.run.scene)?;
     let mut options = run_options(&args.run, &scene)?;

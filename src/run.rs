@@ -107,8 +107,8 @@ pub fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
 }
 
 /// Makes rayon's global pool `threads` wide, so that work outside a run's own pool
-/// (writing the outputs, merging shards) keeps to `--threads` as well; only the
-/// process's first call counts.
+/// (loading, writing the outputs, merging shards) keeps to `--threads` as well; only a
+/// call before anything used the global pool counts.
 pub fn limit_global_threads(threads: usize) {
     let _ = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
