@@ -560,7 +560,7 @@ fn merge_command(
     scene: Option<&Path>,
     threads: Option<usize>,
 ) -> Result<()> {
-    limit_global_threads(threads);
+    limit_global_threads(threads)?;
     let mut shards = Vec::new();
     for dir in dirs {
         let (c, path) = Checkpoint::load(dir)?;
@@ -615,15 +615,18 @@ fn merge_command(
 }
 
 /// `--threads` for all the process's parallel work (loading, outputs), not only the
-/// photon pass's own pool: set before anything runs in parallel.
-fn limit_global_threads(threads: Option<usize>) {
+/// photon pass's own pool: set before anything runs in parallel (a count above
+/// `run::MAX_THREADS` is refused here, before any thread starts).
+fn limit_global_threads(threads: Option<usize>) -> Result<()> {
     if let Some(t) = threads.filter(|&t| t > 0) {
+        luxtally::run::check_threads(t)?;
         luxtally::run::limit_global_threads(t);
     }
+    Ok(())
 }
 
 fn run_command(args: RunArgs) -> Result<()> {
-    limit_global_threads(args.threads);
+    limit_global_threads(args.threads)?;
     let budget = budget_for(&args)?;
     let scene = luxtally::scene::load(&args.scene)?;
     let mut options = run_options(&args, &scene)?;
@@ -670,7 +673,7 @@ fn run_into(
 
 /// `render`: the photon pass (or a saved map with --from), then the eye pass.
 fn render_command(args: RenderArgs) -> Result<()> {
-    limit_global_threads(args.run.threads);
+    limit_global_threads(args.run.threads)?;
     let budget = budget_for(&args.run)?;
     let mut scene = luxtally::scene::load(&args.run.scene)?;
     let mut options = run_options(&args.run, &scene)?;

@@ -164,6 +164,20 @@ fn unreadable_sizes_and_thread_counts_are_one_line_errors() {
         all.extend(args);
         assert_refused(&luxtally(&all), &[needle], &out);
     }
+    // render too: refused before any thread starts (a pool of 100,000 threads panics).
+    let render = [
+        "render",
+        "scenes/office.toml",
+        "--out",
+        s(&out),
+        "--threads",
+        "100000",
+    ];
+    assert_refused(
+        &luxtally(&render),
+        &["--threads: 100000 is more than 1024"],
+        &out,
+    );
 }
 
 #[test]
