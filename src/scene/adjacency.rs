@@ -49,9 +49,27 @@ impl VertexFaces {
         use rayon::prelude::*;
         // + 0.0 makes −0.0 +0.0: one point, one key.
         let key = |i: u32| vertices[i as usize].to_array().map(|x| (x + 0.0).to_bits());
-        let mut order: Vec<u32> = (0..vertices.len() as u32).collect();
+        // Only vertices whose key's hash bucket holds another vertex can share a point:
+        // one pass over two bit sets (bucket seen, seen twice) leaves the sort those few
+        // on a mesh that shares its vertices (all of them on one that does not).
+        let buckets = (8 * vertices.len()).next_power_of_two().max(64);
+        let bucket = |i: u32| {
+            let [x, y, z] = key(i).map(u64::from);
+            let h = (x | y << 32).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ z;
+            (h.wrapping_mul(0xbf58_476d_1ce4_e5b9) >> 32) as usize & (buckets - 1)
+        };
+        let (mut seen, mut twice) = (vec![0u64; buckets / 64], vec![0u64; buckets / 64]);
+        for i in 0..vertices.len() as u32 {
+            let (word, bit) = (bucket(i) / 64, 1u64 << (bucket(i) % 64));
+            twice[word] |= seen[word] & bit;
+            seen[word] |= bit;
+        }
+        drop(seen);
+        let shared_bucket = |i: &u32| twice[bucket(*i) / 64] & (1 << (bucket(*i) % 64)) != 0;
+        let mut order: Vec<u32> = (0..vertices.len() as u32).filter(shared_bucket).collect();
+        drop(twice);
         order.par_sort_unstable_by_key(|&i| (key(i), i));
-        let mut representative = vec![0u32; vertices.len()];
+        let mut representative: Vec<u32> = (0..vertices.len() as u32).collect();
         for run in order.chunk_by(|&a, &b| key(a) == key(b)) {
             for &i in run {
                 representative[i as usize] = run[0];
@@ -178,6 +196,36 @@ mod tests {
         let by_index = VertexFaces::new(&triangles, vertices.len());
         assert_eq!(by_index.faces(1), &[0]);
         assert_eq!(by_index.faces(6), &[2]);
+    }
+
+    #[test]
+    fn by_position_finds_every_vertex_at_a_point() {
+        use glam::Vec3;
+        // 3000 vertices on a 12 × 12 × 12 lattice (many at one point, some alone), one
+        // triangle per three: the faces of each vertex against a search of all.
+        let mut rng = crate::rng::aux_stream(9);
+        let mut coordinate = || (crate::sampling::uniform(&mut rng) * 12.0).floor() as f32;
+        let vertices: Vec<Vec3> = (0..3000)
+            .map(|_| Vec3::new(coordinate(), coordinate(), coordinate()))
+            .collect();
+        let triangles: Vec<[u32; 3]> = (0..1000).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
+        let welded = VertexFaces::by_position(&triangles, &vertices);
+        for (v, p) in vertices.iter().enumerate() {
+            let expected: Vec<u32> = (0..triangles.len() as u32)
+                .filter(|&t| {
+                    triangles[t as usize]
+                        .iter()
+                        .any(|&i| vertices[i as usize] == *p)
+                })
+                .flat_map(|t| {
+                    let corners = triangles[t as usize].iter();
+                    corners
+                        .filter(|&&i| vertices[i as usize] == *p)
+                        .map(move |_| t)
+                })
+                .collect();
+            assert_eq!(welded.faces(v), &expected[..], "vertex {v} at {p}");
+        }
     }
 
     #[test]
