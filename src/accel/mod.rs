@@ -194,12 +194,14 @@ impl HitBatch {
         // ray-origin offset is sized for. The normal is the backend's (normals are not
         // stored per triangle: see `Geometry`).
         let [a, b, c] = g.triangles[t].map(|i| g.vertices[i as usize]);
-        Some(Surface {
-            point: a + (b - a) * u + (c - a) * v,
-            normal: Vec3::new(self.ngx[k], self.ngy[k], self.ngz[k]),
-            material: g.material.get(t),
-            mapped: Some(tri),
-        })
+        let normal = Vec3::new(self.ngx[k], self.ngy[k], self.ngz[k]);
+        Some(Surface::mapped(
+            tri,
+            [a, b - a, c - a],
+            g.material.get(t),
+            (u, v),
+            normal,
+        ))
     }
 }
 
@@ -213,6 +215,27 @@ pub struct Surface {
     pub material: u32,
     /// The global triangle id if the triangle holds a map.
     pub mapped: Option<u32>,
+}
+
+impl Surface {
+    /// Mapped triangle `tri` hit at barycentrics (u, v), from its first vertex and its
+    /// two edges from it (`[a, b − a, c − a]`): the one formula for the hit point, whether
+    /// the vertices come from the geometry or from the tracer's per-triangle table.
+    #[inline(always)]
+    pub fn mapped(
+        tri: u32,
+        [a, e1, e2]: [Vec3; 3],
+        material: u32,
+        (u, v): (f32, f32),
+        normal: Vec3,
+    ) -> Surface {
+        Surface {
+            point: a + e1 * u + e2 * v,
+            normal,
+            material,
+            mapped: Some(tri),
+        }
+    }
 }
 
 /// How a batch is handed to the backend. Embree implements all; obvhs traces one ray

@@ -60,12 +60,16 @@ impl VertexFaces {
         };
         let (mut seen, mut twice) = (vec![0u64; buckets / 64], vec![0u64; buckets / 64]);
         for i in 0..vertices.len() as u32 {
-            let (word, bit) = (bucket(i) / 64, 1u64 << (bucket(i) % 64));
+            let b = bucket(i);
+            let (word, bit) = (b / 64, 1u64 << (b % 64));
             twice[word] |= seen[word] & bit;
             seen[word] |= bit;
         }
         drop(seen);
-        let shared_bucket = |i: &u32| twice[bucket(*i) / 64] & (1 << (bucket(*i) % 64)) != 0;
+        let shared_bucket = |i: &u32| {
+            let b = bucket(*i);
+            twice[b / 64] & (1 << (b % 64)) != 0
+        };
         let mut order: Vec<u32> = (0..vertices.len() as u32).filter(shared_bucket).collect();
         drop(twice);
         order.par_sort_unstable_by_key(|&i| (key(i), i));

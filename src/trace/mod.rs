@@ -231,9 +231,8 @@ impl<'a> SurvivorLanes<'a> {
 /// the ray caster dominate anyway.
 pub const SURFACE_TABLE_MAX_TRIANGLES: usize = 1 << 16;
 
-/// A triangle's first vertex, its two edges from it and its material: the hit point is
-/// `a + e1·u + e2·v`, the same f32 operations in the same order as
-/// [`crate::accel::HitBatch::surface`]'s `a + (b − a)·u + (c − a)·v`, so the same bits,
+/// A triangle's first vertex, its two edges from it and its material, for
+/// [`Surface::mapped`] (as [`crate::accel::HitBatch::surface`] calls it: the same bits),
 /// one load from the triangle id instead of two dependent ones.
 #[derive(Clone, Copy, Debug)]
 struct TriangleSurface {
@@ -488,13 +487,9 @@ impl<'a> Tracer<'a> {
         for k in 0..n {
             let tri = hit_tri[k];
             let surface = if let Some(row) = self.surface_table.get(tri as usize) {
-                let (u, v) = (hit_u[k], hit_v[k]);
-                Surface {
-                    point: row.a + row.e1 * u + row.e2 * v,
-                    normal: Vec3::new(ngx[k], ngy[k], ngz[k]),
-                    material: row.material,
-                    mapped: Some(tri),
-                }
+                let normal = Vec3::new(ngx[k], ngy[k], ngz[k]);
+                let (corner, uv) = ([row.a, row.e1, row.e2], (hit_u[k], hit_v[k]));
+                Surface::mapped(tri, corner, row.material, uv, normal)
             } else if let Some(surface) = hits.surface(k, self.geometry) {
                 surface
             } else {
