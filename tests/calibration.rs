@@ -255,30 +255,6 @@ fn report(name: &str, runs: &[Cells]) {
     }
 }
 
-const METER: &str = r#"
-    [materials.floor]
-    reflectance = 0.6
-    [[objects]]
-    shape = "rect"
-    corner = [-20, -20, 0]
-    u = [40, 0, 0]
-    v = [0, 40, 0]
-    material = "floor"
-    [[lights]]
-    type = "point"
-    position = [0, 0, 2]
-    intensity_cd = 1000
-    [[receivers]]
-    name = "meter"
-    corner = [-0.5, -0.5, 0.0001]
-    u = [1, 0, 0]
-    v = [0, 1, 0]
-    cells = [16, 16]
-    quantity = "luminance"
-    view_direction = [0, 0, -1]
-    half_angle_deg = 30
-"#;
-
 fn meter_exact(i: usize, j: usize) -> f64 {
     let (x0, y0) = (-0.5 + i as f64 / 16.0, -0.5 + j as f64 / 16.0);
     0.6 / PI * point_source_cell_lx(1000.0, 2.0, x0, x0 + 1.0 / 16.0, y0, y0 + 1.0 / 16.0)
@@ -333,7 +309,15 @@ fn spot_exact(i: usize, j: usize) -> f64 {
 #[ignore]
 fn study_meter() {
     let runs: Vec<Cells> = (1..=6)
-        .map(|seed| study_run(METER, 1_000_000, seed, Estimator::NextEvent, meter_exact))
+        .map(|seed| {
+            study_run(
+                NEAR_ZONE_METER,
+                1_000_000,
+                seed,
+                Estimator::NextEvent,
+                meter_exact,
+            )
+        })
         .collect();
     report("meter next_event 1M", &runs);
 }
@@ -615,7 +599,13 @@ fn pooled_z(
 #[test]
 fn near_zone_luminance_meter_is_calibrated() {
     // About 11 crossing scores per cell (some 2–4): the case that found the defect.
-    let z = pooled_z(METER, 1_000_000, 6, Estimator::NextEvent, meter_exact);
+    let z = pooled_z(
+        NEAR_ZONE_METER,
+        1_000_000,
+        6,
+        Estimator::NextEvent,
+        meter_exact,
+    );
     assert_eq!(z.len(), 6 * 256, "every cell's error is known");
     assert_calibrated_tails(&z, "near-zone luminance meter");
 }

@@ -175,33 +175,7 @@ fn luminance_receiver_over_lambertian_floor_reads_rho_e_over_pi(
     photons: u64,
 ) {
     let (rho, intensity, h) = (0.6, 1000.0, 2.0);
-    let s = run_scene_with(
-        r#"
-        [materials.floor]
-        reflectance = 0.6
-        [[objects]]
-        shape = "rect"
-        corner = [-20, -20, 0]
-        u = [40, 0, 0]
-        v = [0, 40, 0]
-        material = "floor"
-        [[lights]]
-        type = "point"
-        position = [0, 0, 2]
-        intensity_cd = 1000
-        [[receivers]]
-        name = "meter"
-        corner = [-0.5, -0.5, 0.0001]
-        u = [1, 0, 0]
-        v = [0, 1, 0]
-        cells = [16, 16]
-        quantity = "luminance"
-        view_direction = [0, 0, -1]
-        half_angle_deg = 30
-        "#,
-        photons,
-        estimator,
-    );
+    let s = run_scene_with(NEAR_ZONE_METER, photons, estimator);
     let r = &s.receivers["meter"];
     assert_eq!(r.unit, "cd/m2");
     let exact = |i: usize, j: usize| {

@@ -171,3 +171,30 @@ pub fn cell_average(f: impl Fn(f64, f64) -> f64, x0: f64, x1: f64, y0: f64, y1: 
     }
     sum
 }
+
+/// A luminance meter of 16 × 16 cells just above a 40 m grey floor (ρ = 0.6), 2 m under
+/// a 1000 cd point source: L = ρE/π, cells in the near zone of the floor few photons
+/// reach (tests/physics.rs, tests/calibration.rs).
+pub const NEAR_ZONE_METER: &str = r#"
+    [materials.floor]
+    reflectance = 0.6
+    [[objects]]
+    shape = "rect"
+    corner = [-20, -20, 0]
+    u = [40, 0, 0]
+    v = [0, 40, 0]
+    material = "floor"
+    [[lights]]
+    type = "point"
+    position = [0, 0, 2]
+    intensity_cd = 1000
+    [[receivers]]
+    name = "meter"
+    corner = [-0.5, -0.5, 0.0001]
+    u = [1, 0, 0]
+    v = [0, 1, 0]
+    cells = [16, 16]
+    quantity = "luminance"
+    view_direction = [0, 0, -1]
+    half_angle_deg = 30
+"#;
