@@ -488,3 +488,94 @@ fn a_luminance_meter_looking_at_an_area_source_reads_its_luminance() {
     assert_eq!(r.direct_estimator, "sampled");
     assert_matches(r, |_, _| LUMINANCE, "luminance meter under a panel");
 }
+
+/// The cells a point light's shadow edge crosses take the refined pattern
+/// (`direct::EDGE_REFINEMENT`) and no others: the occluder's straight edge, slanted at
+/// 20° to the cells, is found by the shadow rays at the cells' corners however little of
+/// a cell it clips.
+#[test]
+fn cells_a_shadow_edge_crosses_are_refined_and_no_others() {
+    use luxtally::tally::ReceiverGrid;
+    use luxtally::trace::direct::{points_per_side, DirectLight, EDGE_REFINEMENT};
+    use luxtally::trace::emit::Emitters;
+    let a = 20f64.to_radians();
+    let (n, t) = (
+        DVec3::new(a.cos(), a.sin(), 0.0),
+        DVec3::new(-a.sin(), a.cos(), 0.0),
+    );
+    // Lit on the receiver (0.0001 m over z = 0) where n·p ≥ c; the occluder at z = 1 covers
+    // n·p < c/1.9999 there, seen from the light at z = 2.
+    let c = 0.23;
+    let p0 = n * (c / 1.9999) - t * 10.0;
+    let toml = format!(
+        r#"
+        [materials.black]
+        reflectance = 0.0
+        [[objects]]
+        shape = "rect"
+        corner = [{}, {}, 1.0]
+        u = [{}, {}, 0]
+        v = [{}, {}, 0]
+        material = "black"
+        [[lights]]
+        type = "point"
+        position = [0, 0, 2]
+        intensity_cd = 1000
+        [[receivers]]
+        name = "r"
+        corner = [-1, -1, 0.0001]
+        u = [2, 0, 0]
+        v = [0, 2, 0]
+        cells = [16, 16]
+        estimator = "next_event"
+        "#,
+        p0.x,
+        p0.y,
+        20.0 * t.x,
+        20.0 * t.y,
+        -10.0 * n.x,
+        -10.0 * n.y
+    );
+    let scene = scene(&toml);
+    let emitters = Emitters::new(&scene);
+    let r = &scene.receivers[0];
+    let grid = ReceiverGrid::new(r, scene.geometry.origin, 0, r.estimator);
+    let caster = luxtally::accel::build(luxtally::accel::Backend::Embree, &scene.geometry)
+        .expect("backend builds");
+    let direct = DirectLight {
+        emitters: &emitters,
+        caster: caster.as_ref(),
+        slack: 1e-6,
+        seed: 1,
+    };
+    let sides = direct.cell_sides(&grid);
+    let base = points_per_side(grid.cell_count());
+    let w = 2.0 / 16.0;
+    let mut refined = 0;
+    for (k, &side) in sides.iter().enumerate() {
+        let (x0, y0) = (-1.0 + (k % 16) as f64 * w, -1.0 + (k / 16) as f64 * w);
+        let lit: Vec<f64> = [(0.0, 0.0), (w, 0.0), (0.0, w), (w, w)]
+            .iter()
+            .map(|(dx, dy)| n.x * (x0 + dx) + n.y * (y0 + dy) - c)
+            .collect();
+        let (lo, hi) = lit
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &d| {
+                (lo.min(d), hi.max(d))
+            });
+        if lo > 1e-6 || hi < -1e-6 {
+            assert_eq!(
+                side, base,
+                "cell {k} lies wholly on one side of the shadow edge"
+            );
+        } else if lo < -1e-6 && hi > 1e-6 {
+            assert_eq!(
+                side,
+                EDGE_REFINEMENT * base,
+                "the shadow edge crosses cell {k}"
+            );
+        }
+        refined += (side != base) as usize;
+    }
+    assert!(refined >= 16, "{refined} cells refined");
+}

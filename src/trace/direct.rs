@@ -55,10 +55,23 @@ const EDGE_PROBES_PER_SIDE: u32 = 8;
 /// (scenes/luminaires.toml) refining for every light's edge doubled the direct rays.
 const EDGE_MIN_SHARE: f64 = 0.1;
 
+/// What one light gives a corner of a receiver's cells, ordered so that the most light
+/// wins where a light reaches a corner along several paths.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum CornerLight {
+    /// No unoccluded light (outside a cone, behind the source, or beyond the receiver's
+    /// acceptance).
+    Unlit,
+    /// Light that an occluder blocks.
+    Shadowed,
+    Lit,
+}
+
 /// Whether the unoccluded light of some light is zero at some probes of the cell and
 /// positive at others (a spot's cone edge, a source's plane, a receiver's acceptance
-/// cone crossing the cell), probed on the cell's border and at its centre, and that
-/// light gives at least [`EDGE_MIN_SHARE`] of the cell's light. There few of a
+/// cone crossing the cell), probed on the cell's border and at its centre, or
+/// `shadow_edge(light)` (an occluder's shadow crosses the cell: [`CornerLight`]), and
+/// that light gives at least [`EDGE_MIN_SHARE`] of the cell's light. There few of a
 /// replicate's points see light, and those deepest into the lit part carry most of it:
 /// with 4 × 4 points per replicate a barely grazed cell's replicates are so skewed that
 /// a run of a few dozen of them reads low with a small σ (docs/method.md, "Cells few
@@ -69,6 +82,7 @@ fn crosses_light_edge(
     emitters: &Emitters,
     grid: &ReceiverGrid,
     cell_point: impl Fn(f64, f64) -> DVec3,
+    shadow_edge: impl Fn(usize) -> bool,
 ) -> bool {
     const N: u32 = EDGE_PROBES_PER_SIDE;
     let probe = |k: u32| {
@@ -104,7 +118,7 @@ fn crosses_light_edge(
                 dark = true;
             }
         }
-        if lit && dark {
+        if (lit && dark) || (lit && shadow_edge(light)) {
             crossing.push(max);
         }
     }
@@ -198,17 +212,70 @@ impl DirectLight<'_> {
     /// alone decide it, so a run computes it once (in parallel over cells).
     pub fn cell_sides(&self, grid: &ReceiverGrid) -> Vec<u32> {
         let m = points_per_side(grid.cell_count());
+        let corners = self.corner_lights(grid);
         let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
+        let row = grid.cells[0] as usize + 1;
         (0..grid.cell_count() as u32)
             .into_par_iter()
             .map(|k| {
                 let (i, j) = ((k % grid.cells[0]) as f64, (k / grid.cells[0]) as f64);
                 let cell_point = |a: f64, b: f64| grid.point_at((i + a) / nu, (j + b) / nv);
-                if crosses_light_edge(self.emitters, grid, cell_point) {
+                let first = (k / grid.cells[0]) as usize * row + (k % grid.cells[0]) as usize;
+                let shadow_edge = |light: usize| {
+                    let of = |c: usize| corners[light][c];
+                    let four = [
+                        of(first),
+                        of(first + 1),
+                        of(first + row),
+                        of(first + row + 1),
+                    ];
+                    four.contains(&CornerLight::Lit) && four.contains(&CornerLight::Shadowed)
+                };
+                if crosses_light_edge(self.emitters, grid, cell_point, shadow_edge) {
                     EDGE_REFINEMENT * m
                 } else {
                     m
                 }
+            })
+            .collect()
+    }
+
+    /// Per light, what reaches each corner of the grid's cells ((nu + 1) × (nv + 1)
+    /// corners, row by row) from the source's centre, through the backend's occlusion
+    /// path. A straight shadow edge crossing a cell leaves at least one of its corners
+    /// on each side, so a lit and a shadowed corner find every such cell (one shadow ray
+    /// per corner and light, shared by the four cells around it).
+    fn corner_lights(&self, grid: &ReceiverGrid) -> Vec<Vec<CornerLight>> {
+        const CHUNK: usize = 4096;
+        let row = grid.cells[0] as usize + 1;
+        let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
+        let corners = row * (grid.cells[1] as usize + 1);
+        (0..self.emitters.emitters.len())
+            .map(|light| {
+                let mut states = vec![CornerLight::Unlit; corners];
+                states.par_chunks_mut(CHUNK).enumerate().for_each_init(
+                    Scratch::default,
+                    |s, (chunk, out)| {
+                        s.rays.clear();
+                        s.weights.clear();
+                        for o in 0..out.len() {
+                            let c = chunk * CHUNK + o;
+                            let p = grid.point_at((c % row) as f64 / nu, (c / row) as f64 / nv);
+                            self.queue(grid, light, p, (0.5, 0.5), 1.0, o as u32, s);
+                        }
+                        self.caster.occluded(&s.rays, &mut s.occluded);
+                        for (&(o, w), &blocked) in s.weights.iter().zip(&s.occluded) {
+                            let state = match (w > 0.0, blocked) {
+                                (false, _) => CornerLight::Unlit,
+                                (true, true) => CornerLight::Shadowed,
+                                (true, false) => CornerLight::Lit,
+                            };
+                            let corner = &mut out[o as usize];
+                            *corner = (*corner).max(state);
+                        }
+                    },
+                );
+                states
             })
             .collect()
     }
