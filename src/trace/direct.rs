@@ -118,7 +118,7 @@ fn crosses_light_edge(
                 dark = true;
             }
         }
-        if (lit && dark) || (lit && shadow_edge(light)) {
+        if lit && (dark || shadow_edge(light)) {
             crossing.push(max);
         }
     }
