@@ -212,69 +212,85 @@ impl DirectLight<'_> {
     /// alone decide it, so a run computes it once (in parallel over cells).
     pub fn cell_sides(&self, grid: &ReceiverGrid) -> Vec<u32> {
         let m = points_per_side(grid.cell_count());
-        let corners = self.corner_lights(grid);
-        let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
-        let row = grid.cells[0] as usize + 1;
-        (0..grid.cell_count() as u32)
+        let [nu, nv] = grid.cells;
+        let row = nu as usize + 1;
+        // Bands of rows run in parallel; each casts the shadow rays of its own corners
+        // (shared by its cells) and holds their light only while it runs.
+        let band_rows = (nv / 64).max(1);
+        let bands: Vec<Vec<u32>> = (0..nv.div_ceil(band_rows))
             .into_par_iter()
-            .map(|k| {
-                let (i, j) = ((k % grid.cells[0]) as f64, (k / grid.cells[0]) as f64);
-                let cell_point = |a: f64, b: f64| grid.point_at((i + a) / nu, (j + b) / nv);
-                let first = (k / grid.cells[0]) as usize * row + (k % grid.cells[0]) as usize;
-                let shadow_edge = |light: usize| {
-                    let of = |c: usize| corners[light][c];
-                    let four = [
-                        of(first),
-                        of(first + 1),
-                        of(first + row),
-                        of(first + row + 1),
-                    ];
-                    four.contains(&CornerLight::Lit) && four.contains(&CornerLight::Shadowed)
-                };
-                if crosses_light_edge(self.emitters, grid, cell_point, shadow_edge) {
-                    EDGE_REFINEMENT * m
-                } else {
-                    m
-                }
+            .map_init(Scratch::default, |s, band| {
+                let rows = band * band_rows..((band + 1) * band_rows).min(nv);
+                let corners = self.corner_lights(grid, rows.clone(), s);
+                let cells = rows.clone().flat_map(|j| (0..nu).map(move |i| (i, j)));
+                cells
+                    .map(|(i, j)| {
+                        let cell_point = |a: f64, b: f64| {
+                            grid.point_at((i as f64 + a) / nu as f64, (j as f64 + b) / nv as f64)
+                        };
+                        let first = (j - rows.start) as usize * row + i as usize;
+                        let shadow_edge = |light: usize| {
+                            let of = |c: usize| corners[light][c];
+                            let four = [
+                                of(first),
+                                of(first + 1),
+                                of(first + row),
+                                of(first + row + 1),
+                            ];
+                            four.contains(&CornerLight::Lit)
+                                && four.contains(&CornerLight::Shadowed)
+                        };
+                        if crosses_light_edge(self.emitters, grid, cell_point, shadow_edge) {
+                            EDGE_REFINEMENT * m
+                        } else {
+                            m
+                        }
+                    })
+                    .collect()
             })
-            .collect()
+            .collect();
+        bands.concat()
     }
 
-    /// Per light, what reaches each corner of the grid's cells ((nu + 1) × (nv + 1)
-    /// corners, row by row) from the source's centre, through the backend's occlusion
-    /// path. A straight shadow edge crossing a cell leaves at least one of its corners
-    /// on each side, so a lit and a shadowed corner find every such cell (one shadow ray
-    /// per corner and light, shared by the four cells around it).
-    fn corner_lights(&self, grid: &ReceiverGrid) -> Vec<Vec<CornerLight>> {
-        const CHUNK: usize = 4096;
+    /// Per light, what reaches each corner of the cells of rows `rows` of the grid
+    /// ((nu + 1) × (rows + 1) corners, row by row) from the source's centre, through the
+    /// backend's occlusion path. A straight shadow edge crossing a cell leaves at least
+    /// one of its corners on each side, so a lit and a shadowed corner find every such
+    /// cell (one shadow ray per corner and light, shared by the cells around it).
+    fn corner_lights(
+        &self,
+        grid: &ReceiverGrid,
+        rows: std::ops::Range<u32>,
+        s: &mut Scratch,
+    ) -> Vec<Vec<CornerLight>> {
+        const BATCH: usize = 4096;
         let row = grid.cells[0] as usize + 1;
         let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
-        let corners = row * (grid.cells[1] as usize + 1);
+        let corners = row * (rows.len() + 1);
+        let corner_point = |c: usize| {
+            let j = rows.start as usize + c / row;
+            grid.point_at((c % row) as f64 / nu, j as f64 / nv)
+        };
         (0..self.emitters.emitters.len())
             .map(|light| {
                 let mut states = vec![CornerLight::Unlit; corners];
-                states.par_chunks_mut(CHUNK).enumerate().for_each_init(
-                    Scratch::default,
-                    |s, (chunk, out)| {
-                        s.rays.clear();
-                        s.weights.clear();
-                        for o in 0..out.len() {
-                            let c = chunk * CHUNK + o;
-                            let p = grid.point_at((c % row) as f64 / nu, (c / row) as f64 / nv);
-                            self.queue(grid, light, p, (0.5, 0.5), 1.0, o as u32, s);
-                        }
-                        self.caster.occluded(&s.rays, &mut s.occluded);
-                        for (&(o, w), &blocked) in s.weights.iter().zip(&s.occluded) {
-                            let state = match (w > 0.0, blocked) {
-                                (false, _) => CornerLight::Unlit,
-                                (true, true) => CornerLight::Shadowed,
-                                (true, false) => CornerLight::Lit,
-                            };
-                            let corner = &mut out[o as usize];
-                            *corner = (*corner).max(state);
-                        }
-                    },
-                );
+                for first in (0..corners).step_by(BATCH) {
+                    s.rays.clear();
+                    s.weights.clear();
+                    for c in first..(first + BATCH).min(corners) {
+                        self.queue(grid, light, corner_point(c), (0.5, 0.5), 1.0, c as u32, s);
+                    }
+                    self.caster.occluded(&s.rays, &mut s.occluded);
+                    for (&(c, w), &blocked) in s.weights.iter().zip(&s.occluded) {
+                        let state = match (w > 0.0, blocked) {
+                            (false, _) => CornerLight::Unlit,
+                            (true, true) => CornerLight::Shadowed,
+                            (true, false) => CornerLight::Lit,
+                        };
+                        let corner = &mut states[c as usize];
+                        *corner = (*corner).max(state);
+                    }
+                }
                 states
             })
             .collect()
