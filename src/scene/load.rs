@@ -135,37 +135,44 @@ fn within_limit(total: u64, limit: u64, what: &str, hint: &str, at: &str) -> Res
 /// prototypes and placements, then builds one `Geometry`.
 #[derive(Default)]
 struct GeometryBuilder {
-    vertices: Vec<DVec3>,
-    triangles: Vec<[u32; 3]>,
-    material: Vec<u32>,
-    object: Vec<u32>,
+    /// Mapped objects' meshes in world space, joined once by `finish` (a large mesh is
+    /// moved, not copied, when it is the only one).
+    mapped: Vec<MappedPart>,
+    mapped_vertices: usize,
+    mapped_triangles: usize,
     prototypes: Vec<PrototypeMesh>,
     placements: Vec<Placement>,
 }
 
+struct MappedPart {
+    mesh: Mesh,
+    material: Vec<u32>,
+    object: u32,
+}
+
 impl GeometryBuilder {
-    fn add(&mut self, mesh: Mesh, materials: &[u32], object: u32, at: &str) -> Result<()> {
+    fn add(&mut self, mesh: Mesh, material: Vec<u32>, object: u32, at: &str) -> Result<()> {
         // Geometry indexes vertices with u32.
-        if self.vertices.len() + mesh.vertices.len() > u32::MAX as usize {
+        if self.mapped_vertices + mesh.vertices.len() > u32::MAX as usize {
             return Err(Error::input(
                 at,
                 "too many vertices in the scene (more than 2^32)",
             ));
         }
-        let base = self.vertices.len() as u32;
-        self.vertices.extend(mesh.vertices);
-        self.triangles
-            .extend(mesh.triangles.iter().map(|t| t.map(|i| i + base)));
-        self.material.extend_from_slice(materials);
-        self.object
-            .extend(std::iter::repeat_n(object, mesh.triangles.len()));
+        self.mapped_vertices += mesh.vertices.len();
+        self.mapped_triangles += mesh.triangles.len();
+        self.mapped.push(MappedPart {
+            mesh,
+            material,
+            object,
+        });
         Ok(())
     }
 
     /// Errs, before anything is allocated, when `more` mapped triangles would pass
     /// [`MAX_MAPPED_TRIANGLES`].
     fn check_mapped(&self, more: u64, at: &str) -> Result<()> {
-        let total = self.triangles.len() as u64 + more;
+        let total = self.mapped_triangles as u64 + more;
         let hint = " (each holds a map): set `map = false` on instanced objects";
         within_limit(total, MAX_MAPPED_TRIANGLES, "mapped triangles", hint, at)
     }
@@ -176,18 +183,42 @@ impl GeometryBuilder {
         within_limit(total, MAX_INSTANCES, "instances", "", at)
     }
 
-    fn finish(self, origin: &str) -> Result<Geometry> {
-        if let Some(bad) = self.vertices.iter().find(|v| !v.is_finite()) {
+    fn finish(mut self, origin: &str) -> Result<Geometry> {
+        let (vertices, triangles, material, object) = if self.mapped.len() == 1 {
+            let part = self.mapped.pop().expect("one part");
+            let object = vec![part.object; part.mesh.triangles.len()];
+            (
+                part.mesh.vertices,
+                part.mesh.triangles,
+                part.material,
+                object,
+            )
+        } else {
+            let (v, t) = (self.mapped_vertices, self.mapped_triangles);
+            let mut vertices = Vec::with_capacity(v);
+            let mut triangles = Vec::with_capacity(t);
+            let mut material = Vec::with_capacity(t);
+            let mut object = Vec::with_capacity(t);
+            for part in self.mapped {
+                let base = vertices.len() as u32;
+                vertices.extend_from_slice(&part.mesh.vertices);
+                triangles.extend(part.mesh.triangles.iter().map(|t| t.map(|i| i + base)));
+                material.extend_from_slice(&part.material);
+                object.extend(std::iter::repeat_n(part.object, part.mesh.triangles.len()));
+            }
+            (vertices, triangles, material, object)
+        };
+        if let Some(bad) = vertices.iter().find(|v| !v.is_finite()) {
             return Err(Error::input(
                 origin,
                 format!("object vertex {bad} is not finite after transforms"),
             ));
         }
         Ok(Geometry::with_instances(
-            &self.vertices,
-            &self.triangles,
-            &self.material,
-            &self.object,
+            &vertices,
+            triangles,
+            &material,
+            &object,
             &self.prototypes,
             &self.placements,
         ))
@@ -360,7 +391,7 @@ impl Placed {
             .map(|(p, _)| prototypes[*p as usize].triangles.len() as u64)
             .sum();
         builder.check_mapped(per_copy.saturating_mul(self.copies.len() as u64), at)?;
-        let (mut mesh, per_tri) = flatten(&prototypes, placements);
+        let (mut mesh, per_tri) = flatten(prototypes, placements);
         if let Some(bad) = mesh.vertices.iter().find(|v| !v.is_finite()) {
             return Err(Error::input(
                 format!("{at}.file"),
@@ -369,12 +400,12 @@ impl Placed {
         }
         self.transform.apply(&mut mesh.vertices);
         if self.copies.len() == 1 && self.copies[0] == DAffine3::IDENTITY {
-            return builder.add(mesh, &per_tri, self.object, at);
+            return builder.add(mesh, per_tri, self.object, at);
         }
         for copy in &self.copies {
             let mut placed = Mesh::default();
             append_placed(&mut placed, (&mesh.vertices, &mesh.triangles), Some(copy));
-            builder.add(placed, &per_tri, self.object, at)?;
+            builder.add(placed, per_tri.clone(), self.object, at)?;
         }
         Ok(())
     }
@@ -382,7 +413,18 @@ impl Placed {
 
 /// The prototypes at their placements as one mesh in the object's frame, with each
 /// triangle's material.
-fn flatten(prototypes: &[PrototypeMesh], placements: &[(u32, DAffine3)]) -> (Mesh, Vec<u32>) {
+fn flatten(mut prototypes: Vec<PrototypeMesh>, placements: &[(u32, DAffine3)]) -> (Mesh, Vec<u32>) {
+    // One prototype placed once as it is (a mesh file's usual case): taken, not copied.
+    if let [(proto, node)] = placements {
+        if *node == DAffine3::IDENTITY {
+            let pm = prototypes.swap_remove(*proto as usize);
+            let mesh = Mesh {
+                vertices: pm.vertices,
+                triangles: pm.triangles,
+            };
+            return (mesh, pm.material);
+        }
+    }
     let mut mesh = Mesh::default();
     let mut per_tri = Vec::new();
     for (proto, node) in placements {

@@ -7,6 +7,7 @@
 use super::shapes::Mesh;
 use crate::error::{Error, Result};
 use glam::{DMat4, DQuat, DVec3};
+use std::borrow::Cow;
 use std::path::Path;
 
 /// RGB → scalar reflectance: luminance-weighted (Rec. 709 / sRGB Y), because luxtally
@@ -128,6 +129,16 @@ fn check_vertex(p: DVec3) -> std::result::Result<DVec3, String> {
         Ok(p)
     } else {
         Err(format!("vertex {p} is not finite"))
+    }
+}
+
+fn whole_triangles(indices: usize) -> std::result::Result<(), String> {
+    if indices.is_multiple_of(3) {
+        Ok(())
+    } else {
+        Err(format!(
+            "{indices} indices is not a whole number of triangles"
+        ))
     }
 }
 
@@ -253,15 +264,15 @@ fn add_obj_model(
 
 /// Reads a glTF buffer's bytes: the GLB chunk, a base64 `data:` URI, or a file next to
 /// the glTF file.
-fn buffer_data(
+fn buffer_data<'a>(
     buffer: &gltf::Buffer,
-    blob: Option<&[u8]>,
+    blob: Option<&'a [u8]>,
     dir: &Path,
-) -> std::result::Result<Vec<u8>, String> {
-    let data = match buffer.source() {
+) -> std::result::Result<Cow<'a, [u8]>, String> {
+    let data: Cow<[u8]> = match buffer.source() {
         gltf::buffer::Source::Bin => blob
             .ok_or_else(|| format!("buffer {} refers to a missing GLB chunk", buffer.index()))?
-            .to_vec(),
+            .into(),
         gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
             use base64::Engine;
             let (_, payload) = uri.split_once(";base64,").ok_or_else(|| {
@@ -273,11 +284,13 @@ fn buffer_data(
             base64::engine::general_purpose::STANDARD
                 .decode(payload)
                 .map_err(|e| format!("buffer {}: bad base64 ({e})", buffer.index()))?
+                .into()
         }
         gltf::buffer::Source::Uri(uri) => {
             let file = dir.join(uri);
             std::fs::read(&file)
                 .map_err(|e| format!("buffer {}: {}: {e}", buffer.index(), file.display()))?
+                .into()
         }
     };
     if data.len() < buffer.length() {
@@ -357,7 +370,7 @@ fn node_matrix(node: &gltf::Node) -> DMat4 {
 }
 
 struct GltfWalk<'a> {
-    buffers: Vec<Vec<u8>>,
+    buffers: Vec<Cow<'a, [u8]>>,
     out: MeshParts,
     /// glTF mesh index → prototype, decoded on first use.
     mesh_slot: Vec<Option<u32>>,
@@ -368,18 +381,24 @@ struct GltfWalk<'a> {
     doc: &'a gltf::Document,
 }
 
+/// The JSON and the binary chunk of a glTF file, borrowed: a GLB's two chunks, or the
+/// whole file as JSON. (`gltf::Gltf::from_slice` would copy a GLB's binary chunk.)
+type GltfChunks<'a> = (Cow<'a, [u8]>, Option<Cow<'a, [u8]>>);
+
+fn gltf_chunks(bytes: &[u8]) -> std::result::Result<GltfChunks<'_>, String> {
+    if bytes.starts_with(b"glTF") {
+        let glb = gltf::Glb::from_slice(bytes).map_err(|e| format!("malformed glTF: {e}"))?;
+        Ok((glb.json, glb.bin))
+    } else {
+        Ok((bytes.into(), None))
+    }
+}
+
 /// gltf-json 1.4.1's validation indexes `accessors[POSITION]` before checking that the
 /// index exists, and panics on a bad one: check that first on the unvalidated JSON.
-fn precheck_gltf(bytes: &[u8]) -> std::result::Result<(), String> {
-    let json: std::borrow::Cow<[u8]> = if bytes.starts_with(b"glTF") {
-        gltf::Glb::from_slice(bytes)
-            .map_err(|e| format!("malformed glTF: {e}"))?
-            .json
-    } else {
-        bytes.into()
-    };
+fn precheck_gltf(json: &[u8]) -> std::result::Result<(), String> {
     let root: gltf::json::Root =
-        gltf::json::deserialize::from_slice(&json).map_err(|e| format!("malformed glTF: {e}"))?;
+        gltf::json::deserialize::from_slice(json).map_err(|e| format!("malformed glTF: {e}"))?;
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             for accessor in primitive.attributes.values() {
@@ -396,12 +415,13 @@ fn precheck_gltf(bytes: &[u8]) -> std::result::Result<(), String> {
 }
 
 fn load_gltf(bytes: &[u8], path: &Path) -> std::result::Result<MeshParts, String> {
-    precheck_gltf(bytes)?;
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| format!("malformed glTF: {e}"))?;
+    let (json, blob) = gltf_chunks(bytes)?;
+    precheck_gltf(&json)?;
+    let gltf = gltf::Gltf::from_slice(&json).map_err(|e| format!("malformed glTF: {e}"))?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let buffers = gltf
         .buffers()
-        .map(|b| buffer_data(&b, gltf.blob.as_deref(), dir))
+        .map(|b| buffer_data(&b, blob.as_deref(), dir))
         .collect::<std::result::Result<Vec<_>, _>>()?;
     let scene = gltf
         .default_scene()
@@ -480,44 +500,54 @@ impl GltfWalk<'_> {
                 &[DataType::U8, DataType::U16, DataType::U32],
             )?;
         }
-        let buffers = &self.buffers;
-        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| d.as_slice()));
-        let local: Vec<[f32; 3]> = reader
-            .read_positions()
-            .ok_or_else(|| format!("accessor {}: data outside its buffer", positions.index()))?
-            .collect();
-        let indices: Vec<u32> = match primitive.indices() {
-            Some(acc) => reader
-                .read_indices()
-                .ok_or_else(|| format!("accessor {}: data outside its buffer", acc.index()))?
-                .into_u32()
-                .collect(),
-            None => (0..local.len() as u32).collect(),
-        };
-        if !indices.len().is_multiple_of(3) {
-            return Err(format!(
-                "{} indices is not a whole number of triangles",
-                indices.len()
-            ));
-        }
         let base = self.out.prototypes[proto].0.vertices.len();
-        let material = self.material(primitive)?;
-        let (mesh, materials) = &mut self.out.prototypes[proto];
-        for p in &local {
+        let mesh = &mut self.out.prototypes[proto].0;
+        let buffers = &self.buffers;
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &**d));
+        // Read straight into the mesh: a 10⁷-triangle file is no longer held three times.
+        let read = reader
+            .read_positions()
+            .ok_or_else(|| format!("accessor {}: data outside its buffer", positions.index()))?;
+        mesh.vertices.reserve_exact(positions.count());
+        for p in read {
             mesh.vertices
                 .push(check_vertex(DVec3::from_array(p.map(f64::from)))?);
         }
-        for t in indices.chunks_exact(3) {
-            let mut tri = [0u32; 3];
-            for (slot, &i) in tri.iter_mut().zip(t) {
-                if i as usize >= local.len() {
-                    return Err(format!("index {i} out of range ({} vertices)", local.len()));
-                }
-                *slot = u32::try_from(base + i as usize).map_err(|_| "too many vertices")?;
+        let vertex_count = mesh.vertices.len() - base;
+        let corner = |i: u32| {
+            if i as usize >= vertex_count {
+                return Err(format!("index {i} out of range ({vertex_count} vertices)"));
             }
-            mesh.triangles.push(tri);
-            materials.push(material);
+            u32::try_from(base + i as usize).map_err(|_| "too many vertices".to_string())
+        };
+        let triangles_before = mesh.triangles.len();
+        match primitive.indices() {
+            Some(acc) => {
+                let mut indices = reader
+                    .read_indices()
+                    .ok_or_else(|| format!("accessor {}: data outside its buffer", acc.index()))?
+                    .into_u32();
+                whole_triangles(indices.len())?;
+                mesh.triangles.reserve_exact(indices.len() / 3);
+                while let (Some(a), Some(b), Some(c)) =
+                    (indices.next(), indices.next(), indices.next())
+                {
+                    mesh.triangles.push([corner(a)?, corner(b)?, corner(c)?]);
+                }
+            }
+            None => {
+                whole_triangles(vertex_count)?;
+                mesh.triangles.reserve_exact(vertex_count / 3);
+                for k in (0..vertex_count as u32).step_by(3) {
+                    mesh.triangles
+                        .push([corner(k)?, corner(k + 1)?, corner(k + 2)?]);
+                }
+            }
         }
+        let added = mesh.triangles.len() - triangles_before;
+        let material = self.material(primitive)?;
+        let materials = &mut self.out.prototypes[proto].1;
+        materials.resize(materials.len() + added, material);
         Ok(())
     }
 

@@ -469,7 +469,7 @@ impl Geometry {
         material: &[u32],
         object: &[u32],
     ) -> Geometry {
-        Self::with_instances(vertices, triangles, material, object, &[], &[])
+        Self::with_instances(vertices, triangles.to_vec(), material, object, &[], &[])
     }
 
     /// As [`Geometry::from_world`], plus unmapped prototypes placed by `placements`
@@ -477,7 +477,7 @@ impl Geometry {
     /// of both. Placements of prototypes without triangles are dropped.
     pub fn with_instances(
         vertices: &[DVec3],
-        triangles: &[[u32; 3]],
+        triangles: Vec<[u32; 3]>,
         material: &[u32],
         object: &[u32],
         prototypes: &[PrototypeMesh],
@@ -540,11 +540,17 @@ impl Geometry {
 
     /// Stores the triangles of nonzero area (as traced: from the f32 local vertices)
     /// with their material and object.
-    fn set_mapped_triangles(&mut self, triangles: &[[u32; 3]], material: &[u32], object: &[u32]) {
+    fn set_mapped_triangles(
+        &mut self,
+        mut triangles: Vec<[u32; 3]>,
+        material: &[u32],
+        object: &[u32],
+    ) {
         use rayon::prelude::*;
         let keep = |t: &[u32; 3]| self.cross_f64(*t).length() > 0.0;
         if triangles.par_iter().all(keep) {
-            self.triangles = triangles.par_iter().copied().collect::<Vec<_>>().into();
+            triangles.shrink_to_fit();
+            self.triangles = triangles.into();
             self.material = TriangleIds::new(material);
             self.object = TriangleIds::new(object);
             return;
