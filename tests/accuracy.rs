@@ -21,15 +21,7 @@ fn point_over_plane(nu: u32, nv: u32) -> String {
 /// [`point_over_plane`] with the receiver's `estimator`.
 fn point_over_plane_scored(nu: u32, nv: u32, estimator: &str) -> String {
     format!(
-        r#"
-        [materials.black]
-        reflectance = 0.0
-        [[objects]]
-        shape = "rect"
-        corner = [-10, -10, 0]
-        u = [20, 0, 0]
-        v = [0, 20, 0]
-        material = "black"
+        r#"{BLACK_FLOOR}
         [[lights]]
         type = "point"
         position = [0, 0, 2.0]

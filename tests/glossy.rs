@@ -6,8 +6,8 @@
 mod common;
 
 use common::{
-    assert_calibrated, cell_average, gauss8, options, point_source_cell_lx, rms, run_options,
-    run_scene, run_scene_with, z_scores,
+    assert_calibrated, cell_average, gauss8, mirror_image_cell_lx, options, point_over_mirror, rms,
+    run_options, run_scene, run_scene_with, z_scores,
 };
 use glam::DVec3;
 use luxtally::accel::Backend;
@@ -307,37 +307,11 @@ fn furnace_glossy_with_lambertian_mix() {
 /// like a mirror) adds the image of the source as the ideal mirror does.
 fn nearly_smooth_glossy_is_a_mirror(estimator: Estimator, photons: u64) {
     let s = run_scene_with(
-        r#"
-        [materials.mirror]
-        glossy_reflectance = 1.0
-        roughness = 0.001
-        [[objects]]
-        shape = "rect"
-        corner = [-10, -10, 0]
-        u = [20, 0, 0]
-        v = [0, 20, 0]
-        material = "mirror"
-        [[lights]]
-        type = "point"
-        position = [0, 0, 0.5]
-        intensity_cd = 1000
-        [[receivers]]
-        name = "r"
-        corner = [-1, 1, 1.5]
-        u = [2, 0, 0]
-        v = [0, -2, 0]
-        cells = [16, 16]
-        "#,
+        &point_over_mirror("glossy_reflectance = 1.0\n    roughness = 0.001"),
         photons,
         estimator,
     );
-    let w = 2.0 / 16.0;
-    let z = z_scores(&s.receivers["r"], |i, j| {
-        let x0 = -1.0 + i as f64 * w;
-        let y1 = 1.0 - j as f64 * w;
-        point_source_cell_lx(1000.0, 1.0, x0, x0 + w, y1 - w, y1)
-            + point_source_cell_lx(1000.0, 2.0, x0, x0 + w, y1 - w, y1)
-    });
+    let z = z_scores(&s.receivers["r"], mirror_image_cell_lx);
     assert_calibrated(&z, "glossy mirror image");
 }
 
