@@ -488,3 +488,52 @@ fn a_luminance_meter_looking_at_an_area_source_reads_its_luminance() {
     assert_eq!(r.direct_estimator, "sampled");
     assert_matches(r, |_, _| LUMINANCE, "luminance meter under a panel");
 }
+
+/// The spot of [`spot_over_black_floor`] (2 m above its 3 m × 3 m receiver of 16 × 16
+/// cells, lit within 30° of its axis): cells the cone's edge clearly crosses are
+/// refined, cells clearly inside or outside it are not.
+#[test]
+fn cells_a_cone_edge_crosses_are_refined_and_no_others() {
+    use luxtally::tally::ReceiverGrid;
+    use luxtally::trace::direct::{points_per_side, DirectLight, EDGE_REFINEMENT};
+    use luxtally::trace::emit::Emitters;
+    let scene = scene(&spot_over_black_floor());
+    let emitters = Emitters::new(&scene);
+    let r = &scene.receivers[0];
+    let grid = ReceiverGrid::new(r, scene.geometry.origin, 0, Estimator::NextEvent);
+    let caster = luxtally::accel::build(luxtally::accel::Backend::Embree, &scene.geometry)
+        .expect("backend builds");
+    let direct = DirectLight {
+        emitters: &emitters,
+        caster: caster.as_ref(),
+        slack: 1e-6,
+        seed: 1,
+    };
+    let sides = direct.cell_sides(&grid);
+    let base = points_per_side(grid.cell_count());
+    // Radius on the receiver (1.9999 m under the spot) at which the axis angle is `deg`.
+    let radius = |deg: f64| (2.0 - 0.0001) * deg.to_radians().tan();
+    let w = 3.0 / 16.0;
+    let mut refined = 0;
+    for (k, &side) in sides.iter().enumerate() {
+        let (x0, y0) = (-1.5 + (k % 16) as f64 * w, -1.5 + (k / 16) as f64 * w);
+        let nearest = |lo: f64| (0.0f64).clamp(lo, lo + w);
+        let farthest = |lo: f64| lo.abs().max((lo + w).abs());
+        let r_min = nearest(x0).hypot(nearest(y0));
+        let r_max = farthest(x0).hypot(farthest(y0));
+        if r_max < radius(29.0) || r_min > radius(31.0) {
+            assert_eq!(
+                side, base,
+                "cell {k} lies wholly inside or outside the cone"
+            );
+        } else if r_min < radius(29.0) && r_max > radius(31.0) {
+            assert_eq!(
+                side,
+                EDGE_REFINEMENT * base,
+                "the cone's edge crosses cell {k}"
+            );
+        }
+        refined += (side != base) as usize;
+    }
+    assert!(refined > 20, "{refined} cells refined");
+}
