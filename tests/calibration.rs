@@ -650,21 +650,12 @@ fn sphere_map_z(seeds: u64, split_vertices: bool, sigma: MapSigma) -> Vec<f64> {
     use luxtally::scene::adjacency::VertexFaces;
     use luxtally::stats::{triangle_illuminance_lx, triangle_rel_errors, MapKind};
     let (rho, intensity) = (0.2, 100.0);
-    let toml = r#"
-        [materials.coating]
-        reflectance = 0.2
-        [[objects]]
-        shape = "sphere"
-        center = [0, 0, 0]
-        radius = 1.0
-        subdivisions = 3
-        material = "coating"
-        [[lights]]
-        type = "point"
-        position = [0, 0.1, 0.8]
-        intensity_cd = 100
-    "#;
-    let mut s = scene(toml);
+    let mut s = scene(&point_in_sphere(
+        "coating",
+        "reflectance = 0.2",
+        3,
+        [0.0, 0.1, 0.8],
+    ));
     if split_vertices {
         let g = &mut s.geometry;
         let vertices: Vec<glam::Vec3> = g
@@ -839,22 +830,12 @@ fn study_statistics_cost() {
 #[ignore]
 fn study_triangle_errors_cost() {
     use luxtally::scene::adjacency::VertexFaces;
-    let s = scene(
-        r#"
-        [materials.grey]
-        reflectance = 0.5
-        [[objects]]
-        shape = "sphere"
-        center = [0, 0, 0]
-        radius = 1.0
-        subdivisions = 7
-        material = "grey"
-        [[lights]]
-        type = "point"
-        position = [0, 0.1, 0.5]
-        intensity_cd = 100
-    "#,
-    );
+    let s = scene(&point_in_sphere(
+        "grey",
+        "reflectance = 0.5",
+        7,
+        [0.0, 0.1, 0.5],
+    ));
     let opts = options(&s, 1_000_000, 2, Backend::Embree);
     let result = run(&s, &opts, &AtomicBool::new(false), &mut ()).expect("run succeeds");
     let g = &s.geometry;

@@ -6,8 +6,8 @@
 mod common;
 
 use common::{
-    assert_calibrated, cell_average, gauss8, mirror_image_cell_lx, options, point_over_mirror, rms,
-    run_options, run_scene, run_scene_with, z_scores,
+    assert_calibrated, cell_average, gauss8, mirror_image_cell_lx, options, point_in_sphere,
+    point_over_mirror, rms, run_options, run_scene, run_scene_with, z_scores,
 };
 use glam::DVec3;
 use luxtally::accel::Backend;
@@ -245,23 +245,13 @@ fn sphere_mean_hits(b: &Bsdf, chains: u64) -> (f64, f64) {
 /// so the balance is E = Φ·N̄/S, N̄ the mean hits per photon (equivalently
 /// Φ/((1 − ρ_eff)S) with ρ_eff = 1 − 1/N̄), N̄ from the BSDF's own angular chain.
 fn furnace(reflectance: f64, glossy: f64, roughness: f64, photons: u64) {
-    let toml = format!(
-        r#"
-        [materials.shell]
-        reflectance = {reflectance}
-        glossy_reflectance = {glossy}
-        roughness = {roughness}
-        [[objects]]
-        shape = "sphere"
-        center = [0, 0, 0]
-        radius = 1
-        subdivisions = 5
-        material = "shell"
-        [[lights]]
-        type = "point"
-        position = [0, 0, 0]
-        intensity_cd = 100
-        "#
+    let toml = point_in_sphere(
+        "shell",
+        &format!(
+            "reflectance = {reflectance}\nglossy_reflectance = {glossy}\nroughness = {roughness}"
+        ),
+        5,
+        [0.0, 0.0, 0.0],
     );
     let s = run_scene(&toml, photons);
     let m = Material {

@@ -130,26 +130,15 @@ fn integrating_sphere_receiver_reads_direct_plus_uniform_indirect(
 ) {
     let (rho, intensity) = (0.8, 100.0);
     let s = run_scene_with(
-        r#"
-        [materials.coating]
-        reflectance = 0.8
-        [[objects]]
-        shape = "sphere"
-        center = [0, 0, 0]
-        radius = 1.0
-        subdivisions = 4
-        material = "coating"
-        [[lights]]
-        type = "point"
-        position = [0, 0, 0]
-        intensity_cd = 100
+        &(point_in_sphere("coating", "reflectance = 0.8", 4, [0.0, 0.0, 0.0])
+            + r#"
         [[receivers]]
         name = "r"
         corner = [-0.2, 0.2, 0.3]
         u = [0.4, 0, 0]
         v = [0, -0.4, 0]
         cells = [16, 16]
-        "#,
+        "#),
         photons,
         estimator,
     );

@@ -310,3 +310,26 @@ pub fn near_zone_meter_cdm2(i: usize, j: usize) -> f64 {
     0.6 / std::f64::consts::PI
         * point_source_cell_lx(1000.0, 2.0, x0, x0 + 1.0 / 16.0, y0, y0 + 1.0 / 16.0)
 }
+
+/// A 100 cd point source at `source` inside a unit sphere (icosphere of `subdivisions`)
+/// made of the material `name`, whose table holds the lines `material`: the integrating
+/// sphere and the furnace, where every photon stays inside.
+pub fn point_in_sphere(name: &str, material: &str, subdivisions: u32, source: [f64; 3]) -> String {
+    let [x, y, z] = source;
+    format!(
+        r#"
+    [materials.{name}]
+    {material}
+    [[objects]]
+    shape = "sphere"
+    center = [0, 0, 0]
+    radius = 1.0
+    subdivisions = {subdivisions}
+    material = "{name}"
+    [[lights]]
+    type = "point"
+    position = [{x}, {y}, {z}]
+    intensity_cd = 100
+"#
+    )
+}
