@@ -367,13 +367,7 @@ fn shadow_scene() -> String {
     type = "point"
     position = [0, 0, 2]
     intensity_cd = 1000
-    [[receivers]]
-    name = "r"
-    corner = [-1, -1, 0.0001]
-    u = [2, 0, 0]
-    v = [0, 2, 0]
-    cells = [16, 16]
-"#,
+{FLOOR_RECEIVER}"#,
         p0.0,
         p0.1,
         20.0 * t.0,

@@ -18,13 +18,7 @@ fn point_source_over_black_plane_matches_inverse_square_cosine_law(
         type = "point"
         position = [0.3, -0.2, 2.0]
         intensity_cd = 1000
-        [[receivers]]
-        name = "r"
-        corner = [-1, -1, 0.0001]
-        u = [2, 0, 0]
-        v = [0, 2, 0]
-        cells = [16, 16]
-        "#
+        {FLOOR_RECEIVER}"#
         ),
         photons,
         estimator,

@@ -212,6 +212,17 @@ pub const BLACK_FLOOR: &str = r#"
     material = "black"
 "#;
 
+/// A receiver "r" of 16 × 16 cells over [−1, 1]², 0.1 mm above a floor at z = 0 (it
+/// reads the floor's incident light, not light the floor reflects).
+pub const FLOOR_RECEIVER: &str = r#"
+    [[receivers]]
+    name = "r"
+    corner = [-1, -1, 0.0001]
+    u = [2, 0, 0]
+    v = [0, 2, 0]
+    cells = [16, 16]
+"#;
+
 /// A spot of 2000 cd 2 m over [`BLACK_FLOOR`], aimed down, with a smooth profile from
 /// `falloff_deg` 15 to `cone_deg` 30, and a 16 × 16 receiver over [−1.5, 1.5]² 0.1 mm
 /// over the floor: the cone reaches the receiver's edge, so cells see the core, the ramp
