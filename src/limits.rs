@@ -20,8 +20,9 @@ use crate::run::RunOptions;
 use crate::scene::file::{self, Source};
 use crate::scene::{Camera, Scene};
 use crate::tally::{CellPartial, CellSums, CODES_PER_TRIANGLE};
-use crate::trace::CHUNK_PHOTONS;
+use crate::trace::{CHUNK_PHOTONS, SURFACE_TABLE_MAX_TRIANGLES};
 use crate::{Error, Result};
+use glam::Vec3;
 use std::mem::size_of;
 use std::path::Path;
 
@@ -43,6 +44,13 @@ pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE_COMPACT: f64 = 76.0;
 /// The same with obvhs (its CWBVH build holds more while it builds): 1514 and 2994 MiB
 /// for the same scenes as Embree's, 296 bytes per triangle, less the triangle maps' 32.
 pub const GEOMETRY_BYTES_PER_TRIANGLE_OBVHS: f64 = 264.0;
+
+/// The tracer's per-triangle hit-surface table (bytes per mapped triangle): the private
+/// `trace::TriangleSurface`, a triangle's first vertex, its two edges and its material
+/// (keep in step with it). Built only up to [`SURFACE_TABLE_MAX_TRIANGLES`] mapped
+/// triangles (≤ 2.6 MB), so the geometry constants above, measured on millions of
+/// triangles, do not hold it.
+pub const SURFACE_TABLE_BYTES_PER_TRIANGLE: usize = 3 * size_of::<Vec3>() + size_of::<u32>();
 
 /// Per instance of a `map = false` object (bytes): Embree's instance geometry and its
 /// share of the top-level BVH, our `Instance` (transform, normal matrix, bounds).
@@ -193,8 +201,8 @@ impl Estimate {
 
 /// Geometry and BVH of `mapped` triangles (flattened, each with a triangle map; their
 /// BVH the `layout` one, `Auto` counting as fast) and `prototypes` triangles (stored
-/// once for the instances of `map = false` objects, in BVHs of their own, no map), and
-/// the mapped triangles' maps.
+/// once for the instances of `map = false` objects, in BVHs of their own, no map), the
+/// mapped triangles' maps, and the tracer's hit-surface table when it has one.
 pub fn geometry_estimate(mapped: u64, prototypes: u64, backend: Backend, layout: Bvh) -> Estimate {
     // Only the mapped triangles' (top) BVH is ever compact.
     let per_triangle = |compact: bool| match backend {
@@ -223,6 +231,13 @@ pub fn geometry_estimate(mapped: u64, prototypes: u64, backend: Backend, layout:
         // u32 counts (`tally::TriangleCounts`; u64 only past 4.3·10⁹ hits in a slot).
         mapped as f64 * (CODES_PER_TRIANGLE * size_of::<u32>()) as f64,
     );
+    if mapped > 0 && mapped <= SURFACE_TABLE_MAX_TRIANGLES as u64 {
+        e.push(
+            format!("tracer: {mapped} triangles' hit surfaces"),
+            "of surface table",
+            (mapped * SURFACE_TABLE_BYTES_PER_TRIANGLE as u64) as f64,
+        );
+    }
     e
 }
 

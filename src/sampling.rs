@@ -95,28 +95,32 @@ pub fn unit_disk_f32(rng: &mut Pcg32) -> (f32, f32) {
     (x, y)
 }
 
+/// Duff et al.'s (2017) orthonormal basis, written once for both float widths: `$n` a
+/// unit vector of type `$vec` with `$float` components. Expands to the same arithmetic
+/// as a hand-written copy would, so each width keeps its bits and its speed.
+macro_rules! duff_basis {
+    ($n:expr, $vec:ident, $float:ty) => {{
+        let n = $n;
+        let sign = <$float>::copysign(1.0, n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        (
+            $vec::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+            $vec::new(b, sign + n.y * n.y * a, -n.y),
+        )
+    }};
+}
+
 /// Two unit vectors completing `n` (unit) to an orthonormal basis (Duff et al. 2017).
 #[inline]
 pub fn basis(n: DVec3) -> (DVec3, DVec3) {
-    let sign = 1.0_f64.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    (
-        DVec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        DVec3::new(b, sign + n.y * n.y * a, -n.y),
-    )
+    duff_basis!(n, DVec3, f64)
 }
 
 /// [`basis`] in f32.
 #[inline(always)]
 pub fn basis_f32(n: Vec3) -> (Vec3, Vec3) {
-    let sign = 1.0_f32.copysign(n.z);
-    let a = -1.0 / (sign + n.z);
-    let b = n.x * n.y * a;
-    (
-        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
-        Vec3::new(b, sign + n.y * n.y * a, -n.y),
-    )
+    duff_basis!(n, Vec3, f32)
 }
 
 /// A direction uniformly distributed over the unit sphere: a uniform point of the unit

@@ -21,15 +21,7 @@ fn point_over_plane(nu: u32, nv: u32) -> String {
 /// [`point_over_plane`] with the receiver's `estimator`.
 fn point_over_plane_scored(nu: u32, nv: u32, estimator: &str) -> String {
     format!(
-        r#"
-        [materials.black]
-        reflectance = 0.0
-        [[objects]]
-        shape = "rect"
-        corner = [-10, -10, 0]
-        u = [20, 0, 0]
-        v = [0, 20, 0]
-        material = "black"
+        r#"{BLACK_FLOOR}
         [[lights]]
         type = "point"
         position = [0, 0, 2.0]
@@ -82,22 +74,12 @@ fn global_odd_even_error_matches_the_actual_map_error() {
     // Icosphere with a point source at its centre: per-triangle truth is direct
     // Φ·Ω_k/(4π·A_k) plus the sphere's uniform indirect ρΦ/((1−ρ)S).
     let (rho, intensity) = (0.5, 100.0);
-    let scene = scene(
-        r#"
-        [materials.coating]
-        reflectance = 0.5
-        [[objects]]
-        shape = "sphere"
-        center = [0, 0, 0]
-        radius = 1.0
-        subdivisions = 3
-        material = "coating"
-        [[lights]]
-        type = "point"
-        position = [0, 0, 0]
-        intensity_cd = 100
-        "#,
-    );
+    let scene = scene(&point_in_sphere(
+        "coating",
+        "reflectance = 0.5",
+        3,
+        [0.0, 0.0, 0.0],
+    ));
     let opts = options(&scene, 2_000_000, 2, Backend::Embree);
     let result = run(&scene, &opts, &AtomicBool::new(false), &mut ()).unwrap();
     let g = &scene.geometry;

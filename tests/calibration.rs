@@ -256,56 +256,6 @@ fn report(name: &str, runs: &[Cells]) {
     }
 }
 
-fn meter_exact(i: usize, j: usize) -> f64 {
-    let (x0, y0) = (-0.5 + i as f64 / 16.0, -0.5 + j as f64 / 16.0);
-    0.6 / PI * point_source_cell_lx(1000.0, 2.0, x0, x0 + 1.0 / 16.0, y0, y0 + 1.0 / 16.0)
-}
-
-const SPOT: &str = r#"
-    [materials.black]
-    reflectance = 0.0
-    [[objects]]
-    shape = "rect"
-    corner = [-10, -10, 0]
-    u = [20, 0, 0]
-    v = [0, 20, 0]
-    material = "black"
-    [[lights]]
-    type = "spot"
-    position = [0, 0, 2]
-    direction = [0, 0, -1]
-    intensity_cd = 2000
-    cone_deg = 30
-    falloff_deg = 15
-    [[receivers]]
-    name = "r"
-    corner = [-1.5, -1.5, 0.0001]
-    u = [3, 0, 0]
-    v = [0, 3, 0]
-    cells = [16, 16]
-"#;
-
-fn spot_exact(i: usize, j: usize) -> f64 {
-    let (i0, h, cone, falloff) = (2000.0, 2.0 - 0.0001, 30.0f64, 15.0f64);
-    let (cc, cf) = (cone.to_radians().cos(), falloff.to_radians().cos());
-    let e = |x: f64, y: f64| {
-        let d2 = h * h + x * x + y * y;
-        let cos = h / d2.sqrt();
-        let s = ((cos - cc) / (cf - cc)).clamp(0.0, 1.0);
-        i0 * s * s * (3.0 - 2.0 * s) * h / d2.powf(1.5)
-    };
-    let w = 3.0 / 16.0;
-    let (x0, y0) = (-1.5 + i as f64 * w, -1.5 + j as f64 * w);
-    let q = w / 4.0;
-    (0..16)
-        .map(|k| {
-            let (a, b) = (x0 + (k % 4) as f64 * q, y0 + (k / 4) as f64 * q);
-            cell_average(e, a, a + q, b, b + q)
-        })
-        .sum::<f64>()
-        / 16.0
-}
-
 #[test]
 #[ignore]
 fn study_meter() {
@@ -316,7 +266,7 @@ fn study_meter() {
                 1_000_000,
                 seed,
                 Estimator::NextEvent,
-                meter_exact,
+                near_zone_meter_cdm2,
             )
         })
         .collect();
@@ -327,7 +277,15 @@ fn study_meter() {
 #[ignore]
 fn study_spot_track() {
     let runs: Vec<Cells> = (1..=4)
-        .map(|seed| study_run(SPOT, 1_000_000, seed, Estimator::Track, spot_exact))
+        .map(|seed| {
+            study_run(
+                &spot_over_black_floor(),
+                1_000_000,
+                seed,
+                Estimator::Track,
+                spot_cell_lx,
+            )
+        })
         .collect();
     report("spot track 1M", &runs);
 }
@@ -337,7 +295,15 @@ fn study_spot_track() {
 fn study_spot_next_event() {
     for (photons, seeds) in [(10_000, 16), (40_000, 4), (300_000, 4)] {
         let runs: Vec<Cells> = (1..=seeds)
-            .map(|seed| study_run(SPOT, photons, seed, Estimator::NextEvent, spot_exact))
+            .map(|seed| {
+                study_run(
+                    &spot_over_black_floor(),
+                    photons,
+                    seed,
+                    Estimator::NextEvent,
+                    spot_cell_lx,
+                )
+            })
             .collect();
         report(&format!("spot next_event {photons}"), &runs);
     }
@@ -379,53 +345,6 @@ fn clipped_cell_lx(intensity_cd: f64, h: f64, cell: [f64; 4], n: (f64, f64), c: 
     intensity_cd * omega / ((x1 - x0) * (y1 - y0))
 }
 
-/// A point source 2 m over a black floor, a black occluder at 1 m whose straight edge is
-/// slanted at 20° to the cells: the receiver (0.1 mm over the floor) is lit where
-/// n·(x, y) ≥ c.
-const SHADOW_ANGLE_DEG: f64 = 20.0;
-const SHADOW_C: f64 = 0.23;
-
-fn shadow_scene() -> String {
-    let a = SHADOW_ANGLE_DEG.to_radians();
-    let (n, t) = ((a.cos(), a.sin()), (-a.sin(), a.cos()));
-    let c_o = SHADOW_C / 1.9999;
-    let p0 = (n.0 * c_o - 10.0 * t.0, n.1 * c_o - 10.0 * t.1);
-    format!(
-        r#"
-    [materials.black]
-    reflectance = 0.0
-    [[objects]]
-    shape = "rect"
-    corner = [-10, -10, 0]
-    u = [20, 0, 0]
-    v = [0, 20, 0]
-    material = "black"
-    [[objects]]
-    shape = "rect"
-    corner = [{}, {}, 1.0]
-    u = [{}, {}, 0]
-    v = [{}, {}, 0]
-    material = "black"
-    [[lights]]
-    type = "point"
-    position = [0, 0, 2]
-    intensity_cd = 1000
-    [[receivers]]
-    name = "r"
-    corner = [-1, -1, 0.0001]
-    u = [2, 0, 0]
-    v = [0, 2, 0]
-    cells = [16, 16]
-"#,
-        p0.0,
-        p0.1,
-        20.0 * t.0,
-        20.0 * t.1,
-        -10.0 * n.0,
-        -10.0 * n.1
-    )
-}
-
 fn shadow_exact(i: usize, j: usize) -> f64 {
     let a = SHADOW_ANGLE_DEG.to_radians();
     let w = 2.0 / 16.0;
@@ -453,15 +372,10 @@ fn study_shadow() {
     report("shadow next_event 10k", &runs);
 }
 
-const GRAZING: &str = r#"
-    [materials.black]
-    reflectance = 0.0
-    [[objects]]
-    shape = "rect"
-    corner = [-10, -10, 0]
-    u = [20, 0, 0]
-    v = [0, 20, 0]
-    material = "black"
+/// A point source 0.1 m over [`BLACK_FLOOR`] and a receiver from 1 m to 5 m beside it.
+fn grazing_scene() -> String {
+    format!(
+        r#"{BLACK_FLOOR}
     [[lights]]
     type = "point"
     position = [0, 0, 0.1]
@@ -472,7 +386,9 @@ const GRAZING: &str = r#"
     u = [4, 0, 0]
     v = [0, 2, 0]
     cells = [32, 16]
-"#;
+"#
+    )
+}
 
 fn grazing_exact(i: usize, j: usize) -> f64 {
     let (w, h) = (4.0 / 32.0, 2.0 / 16.0);
@@ -484,7 +400,15 @@ fn grazing_exact(i: usize, j: usize) -> f64 {
 #[ignore]
 fn study_grazing_track() {
     let runs: Vec<Cells> = (1..=4)
-        .map(|seed| study_run(GRAZING, 1_000_000, seed, Estimator::Track, grazing_exact))
+        .map(|seed| {
+            study_run(
+                &grazing_scene(),
+                1_000_000,
+                seed,
+                Estimator::Track,
+                grazing_exact,
+            )
+        })
         .collect();
     report("grazing track 1M", &runs);
 }
@@ -494,7 +418,13 @@ fn study_grazing_track() {
 fn study_spot_edge_cells() {
     for photons in [10_000u64, 300_000] {
         for seed in 1..=2 {
-            let c = study_run(SPOT, photons, seed, Estimator::NextEvent, spot_exact);
+            let c = study_run(
+                &spot_over_black_floor(),
+                photons,
+                seed,
+                Estimator::NextEvent,
+                spot_cell_lx,
+            );
             for (i, j) in [
                 (14, 6),
                 (6, 14),
@@ -638,7 +568,7 @@ fn near_zone_luminance_meter_is_calibrated() {
         1_000_000,
         6,
         Estimator::NextEvent,
-        meter_exact,
+        near_zone_meter_cdm2,
     );
     assert_eq!(z.len(), 6 * 256, "every cell's error is known");
     assert_calibrated_tails(&z, "near-zone luminance meter");
@@ -647,7 +577,13 @@ fn near_zone_luminance_meter_is_calibrated() {
 #[test]
 fn grazing_receiver_is_calibrated() {
     // Light arriving at 84–89° from the normal: 0–100 crossings per cell.
-    let z = pooled_z(GRAZING, 1_000_000, 4, Estimator::Track, grazing_exact);
+    let z = pooled_z(
+        &grazing_scene(),
+        1_000_000,
+        4,
+        Estimator::Track,
+        grazing_exact,
+    );
     assert!(z.len() > 1500, "{} cells with a known error", z.len());
     assert_calibrated_tails(&z, "grazing receiver");
 }
@@ -656,7 +592,13 @@ const PHOTONS_EDGE: u64 = 100_000;
 
 #[test]
 fn spot_cone_edge_is_calibrated() {
-    let z = pooled_z(SPOT, PHOTONS_EDGE, 4, Estimator::Track, spot_exact);
+    let z = pooled_z(
+        &spot_over_black_floor(),
+        PHOTONS_EDGE,
+        4,
+        Estimator::Track,
+        spot_cell_lx,
+    );
     assert!(z.len() > 500, "{} cells with a known error", z.len());
     assert_calibrated_tails(&z, "spot cone edge");
 }
@@ -665,7 +607,13 @@ fn spot_cone_edge_is_calibrated() {
 /// edge barely grazes have few lit samples (method.md, "Cells few photons reach").
 #[test]
 fn spot_cone_edge_next_event_is_calibrated() {
-    let z = pooled_z(SPOT, 10_000, 4, Estimator::NextEvent, spot_exact);
+    let z = pooled_z(
+        &spot_over_black_floor(),
+        10_000,
+        4,
+        Estimator::NextEvent,
+        spot_cell_lx,
+    );
     assert!(z.len() > 500, "{} cells with a known error", z.len());
     assert_calibrated_tails(&z, "spot cone edge, sampled direct light");
 }
@@ -714,21 +662,12 @@ fn sphere_map_z(seeds: u64, split_vertices: bool, sigma: MapSigma) -> Vec<f64> {
     use luxtally::scene::adjacency::VertexFaces;
     use luxtally::stats::{triangle_illuminance_lx, triangle_rel_errors, MapKind};
     let (rho, intensity) = (0.2, 100.0);
-    let toml = r#"
-        [materials.coating]
-        reflectance = 0.2
-        [[objects]]
-        shape = "sphere"
-        center = [0, 0, 0]
-        radius = 1.0
-        subdivisions = 3
-        material = "coating"
-        [[lights]]
-        type = "point"
-        position = [0, 0.1, 0.8]
-        intensity_cd = 100
-    "#;
-    let mut s = scene(toml);
+    let mut s = scene(&point_in_sphere(
+        "coating",
+        "reflectance = 0.2",
+        3,
+        [0.0, 0.1, 0.8],
+    ));
     if split_vertices {
         let g = &mut s.geometry;
         let vertices: Vec<glam::Vec3> = g
@@ -903,22 +842,12 @@ fn study_statistics_cost() {
 #[ignore]
 fn study_triangle_errors_cost() {
     use luxtally::scene::adjacency::VertexFaces;
-    let s = scene(
-        r#"
-        [materials.grey]
-        reflectance = 0.5
-        [[objects]]
-        shape = "sphere"
-        center = [0, 0, 0]
-        radius = 1.0
-        subdivisions = 7
-        material = "grey"
-        [[lights]]
-        type = "point"
-        position = [0, 0.1, 0.5]
-        intensity_cd = 100
-    "#,
-    );
+    let s = scene(&point_in_sphere(
+        "grey",
+        "reflectance = 0.5",
+        7,
+        [0.0, 0.1, 0.5],
+    ));
     let opts = options(&s, 1_000_000, 2, Backend::Embree);
     let result = run(&s, &opts, &AtomicBool::new(false), &mut ()).expect("run succeeds");
     let g = &s.geometry;

@@ -101,24 +101,7 @@ const RING: Ring = Ring {
 /// A black floor and a receiver just above it; the scene file has no lights: the ring
 /// is added after loading.
 fn ring_run(estimator: Estimator, photons: u64) -> luxtally::output::summary::Summary {
-    let mut s = scene(
-        r#"
-        [materials.black]
-        reflectance = 0.0
-        [[objects]]
-        shape = "rect"
-        corner = [-10, -10, 0]
-        u = [20, 0, 0]
-        v = [0, 20, 0]
-        material = "black"
-        [[receivers]]
-        name = "r"
-        corner = [-1, -1, 0.0001]
-        u = [2, 0, 0]
-        v = [0, 2, 0]
-        cells = [16, 16]
-        "#,
-    );
+    let mut s = scene(&format!("{BLACK_FLOOR}{FLOOR_RECEIVER}"));
     s.lights.push(SceneLight::new("ring", RING));
     assert_eq!(s.lights[0].get::<Ring>(), Some(&RING));
     let opts = RunOptions {

@@ -489,57 +489,16 @@ fn a_luminance_meter_looking_at_an_area_source_reads_its_luminance() {
     assert_matches(r, |_, _| LUMINANCE, "luminance meter under a panel");
 }
 
-/// The cells a point light's shadow edge crosses take the refined pattern
-/// (`direct::EDGE_REFINEMENT`) and no others: the occluder's straight edge, slanted at
-/// 20° to the cells, is found by the shadow rays at the cells' corners however little of
-/// a cell it clips.
-#[test]
-fn cells_a_shadow_edge_crosses_are_refined_and_no_others() {
+/// Points per side of each cell of the scene's first receiver in a direct-light
+/// replicate (`DirectLight::cell_sides`, next_event), and the unrefined count.
+fn cell_sides(toml: &str) -> (Vec<u32>, u32) {
     use luxtally::tally::ReceiverGrid;
-    use luxtally::trace::direct::{points_per_side, DirectLight, EDGE_REFINEMENT};
+    use luxtally::trace::direct::{points_per_side, DirectLight};
     use luxtally::trace::emit::Emitters;
-    let a = 20f64.to_radians();
-    let (n, t) = (
-        DVec3::new(a.cos(), a.sin(), 0.0),
-        DVec3::new(-a.sin(), a.cos(), 0.0),
-    );
-    // Lit on the receiver (0.0001 m over z = 0) where n·p ≥ c; the occluder at z = 1 covers
-    // n·p < c/1.9999 there, seen from the light at z = 2.
-    let c = 0.23;
-    let p0 = n * (c / 1.9999) - t * 10.0;
-    let toml = format!(
-        r#"
-        [materials.black]
-        reflectance = 0.0
-        [[objects]]
-        shape = "rect"
-        corner = [{}, {}, 1.0]
-        u = [{}, {}, 0]
-        v = [{}, {}, 0]
-        material = "black"
-        [[lights]]
-        type = "point"
-        position = [0, 0, 2]
-        intensity_cd = 1000
-        [[receivers]]
-        name = "r"
-        corner = [-1, -1, 0.0001]
-        u = [2, 0, 0]
-        v = [0, 2, 0]
-        cells = [16, 16]
-        estimator = "next_event"
-        "#,
-        p0.x,
-        p0.y,
-        20.0 * t.x,
-        20.0 * t.y,
-        -10.0 * n.x,
-        -10.0 * n.y
-    );
-    let scene = scene(&toml);
+    let scene = scene(toml);
     let emitters = Emitters::new(&scene);
     let r = &scene.receivers[0];
-    let grid = ReceiverGrid::new(r, scene.geometry.origin, 0, r.estimator);
+    let grid = ReceiverGrid::new(r, scene.geometry.origin, 0, Estimator::NextEvent);
     let caster = luxtally::accel::build(luxtally::accel::Backend::Embree, &scene.geometry)
         .expect("backend builds");
     let direct = DirectLight {
@@ -548,21 +507,62 @@ fn cells_a_shadow_edge_crosses_are_refined_and_no_others() {
         slack: 1e-6,
         seed: 1,
     };
-    let sides = direct.cell_sides(&grid);
-    let base = points_per_side(grid.cell_count());
+    (direct.cell_sides(&grid), points_per_side(grid.cell_count()))
+}
+
+/// The spot of [`spot_over_black_floor`] (2 m above its 3 m × 3 m receiver of 16 × 16
+/// cells, lit within 30° of its axis): cells the cone's edge clearly crosses are
+/// refined, cells clearly inside or outside it are not.
+#[test]
+fn cells_a_cone_edge_crosses_are_refined_and_no_others() {
+    use luxtally::trace::direct::EDGE_REFINEMENT;
+    let (sides, base) = cell_sides(&spot_over_black_floor());
+    // Radius on the receiver (1.9999 m under the spot) at which the axis angle is `deg`.
+    let radius = |deg: f64| (2.0 - 0.0001) * deg.to_radians().tan();
+    let w = 3.0 / 16.0;
+    let mut refined = 0;
+    for (k, &side) in sides.iter().enumerate() {
+        let (x0, y0) = (-1.5 + (k % 16) as f64 * w, -1.5 + (k / 16) as f64 * w);
+        let nearest = |lo: f64| (0.0f64).clamp(lo, lo + w);
+        let farthest = |lo: f64| lo.abs().max((lo + w).abs());
+        let r_min = nearest(x0).hypot(nearest(y0));
+        let r_max = farthest(x0).hypot(farthest(y0));
+        if r_max < radius(29.0) || r_min > radius(31.0) {
+            assert_eq!(
+                side, base,
+                "cell {k} lies wholly inside or outside the cone"
+            );
+        } else if r_min < radius(29.0) && r_max > radius(31.0) {
+            assert_eq!(
+                side,
+                EDGE_REFINEMENT * base,
+                "the cone's edge crosses cell {k}"
+            );
+        }
+        refined += (side != base) as usize;
+    }
+    assert!(refined > 20, "{refined} cells refined");
+}
+
+/// The cells the occluder's shadow edge crosses ([`shadow_scene`]: a point light, the
+/// edge slanted at 20° to the cells) take the refined pattern and no others: the shadow
+/// rays at the cells' corners find the edge however little of a cell it clips.
+#[test]
+fn cells_a_shadow_edge_crosses_are_refined_and_no_others() {
+    use luxtally::trace::direct::EDGE_REFINEMENT;
+    let (sides, base) = cell_sides(&shadow_scene());
+    let a = SHADOW_ANGLE_DEG.to_radians();
     let w = 2.0 / 16.0;
     let mut refined = 0;
     for (k, &side) in sides.iter().enumerate() {
         let (x0, y0) = (-1.0 + (k % 16) as f64 * w, -1.0 + (k / 16) as f64 * w);
-        let lit: Vec<f64> = [(0.0, 0.0), (w, 0.0), (0.0, w), (w, w)]
+        // Signed distance of each corner past the edge (lit where positive).
+        let past: Vec<f64> = [(0.0, 0.0), (w, 0.0), (0.0, w), (w, w)]
             .iter()
-            .map(|(dx, dy)| n.x * (x0 + dx) + n.y * (y0 + dy) - c)
+            .map(|(dx, dy)| a.cos() * (x0 + dx) + a.sin() * (y0 + dy) - SHADOW_C)
             .collect();
-        let (lo, hi) = lit
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &d| {
-                (lo.min(d), hi.max(d))
-            });
+        let lo = past.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = past.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         if lo > 1e-6 || hi < -1e-6 {
             assert_eq!(
                 side, base,

@@ -6,8 +6,8 @@
 mod common;
 
 use common::{
-    assert_calibrated, cell_average, gauss8, options, point_source_cell_lx, rms, run_options,
-    run_scene, run_scene_with, z_scores,
+    assert_calibrated, cell_average, gauss8, mirror_image_cell_lx, options, point_in_sphere,
+    point_over_mirror, rms, run_options, run_scene, run_scene_with, z_scores,
 };
 use glam::DVec3;
 use luxtally::accel::Backend;
@@ -245,23 +245,13 @@ fn sphere_mean_hits(b: &Bsdf, chains: u64) -> (f64, f64) {
 /// so the balance is E = Φ·N̄/S, N̄ the mean hits per photon (equivalently
 /// Φ/((1 − ρ_eff)S) with ρ_eff = 1 − 1/N̄), N̄ from the BSDF's own angular chain.
 fn furnace(reflectance: f64, glossy: f64, roughness: f64, photons: u64) {
-    let toml = format!(
-        r#"
-        [materials.shell]
-        reflectance = {reflectance}
-        glossy_reflectance = {glossy}
-        roughness = {roughness}
-        [[objects]]
-        shape = "sphere"
-        center = [0, 0, 0]
-        radius = 1
-        subdivisions = 5
-        material = "shell"
-        [[lights]]
-        type = "point"
-        position = [0, 0, 0]
-        intensity_cd = 100
-        "#
+    let toml = point_in_sphere(
+        "shell",
+        &format!(
+            "reflectance = {reflectance}\nglossy_reflectance = {glossy}\nroughness = {roughness}"
+        ),
+        5,
+        [0.0, 0.0, 0.0],
     );
     let s = run_scene(&toml, photons);
     let m = Material {
@@ -307,37 +297,11 @@ fn furnace_glossy_with_lambertian_mix() {
 /// like a mirror) adds the image of the source as the ideal mirror does.
 fn nearly_smooth_glossy_is_a_mirror(estimator: Estimator, photons: u64) {
     let s = run_scene_with(
-        r#"
-        [materials.mirror]
-        glossy_reflectance = 1.0
-        roughness = 0.001
-        [[objects]]
-        shape = "rect"
-        corner = [-10, -10, 0]
-        u = [20, 0, 0]
-        v = [0, 20, 0]
-        material = "mirror"
-        [[lights]]
-        type = "point"
-        position = [0, 0, 0.5]
-        intensity_cd = 1000
-        [[receivers]]
-        name = "r"
-        corner = [-1, 1, 1.5]
-        u = [2, 0, 0]
-        v = [0, -2, 0]
-        cells = [16, 16]
-        "#,
+        &point_over_mirror("glossy_reflectance = 1.0\n    roughness = 0.001"),
         photons,
         estimator,
     );
-    let w = 2.0 / 16.0;
-    let z = z_scores(&s.receivers["r"], |i, j| {
-        let x0 = -1.0 + i as f64 * w;
-        let y1 = 1.0 - j as f64 * w;
-        point_source_cell_lx(1000.0, 1.0, x0, x0 + w, y1 - w, y1)
-            + point_source_cell_lx(1000.0, 2.0, x0, x0 + w, y1 - w, y1)
-    });
+    let z = z_scores(&s.receivers["r"], mirror_image_cell_lx);
     assert_calibrated(&z, "glossy mirror image");
 }
 

@@ -449,3 +449,54 @@ fn instances_count_in_a_runs_memory() {
     assert!(err.contains("objects: 250000 instances need"), "{err}");
     assert!(check("1G").is_ok());
 }
+
+#[test]
+fn the_tracers_surface_table_counts_where_the_tracer_builds_one() {
+    use luxtally::trace::SURFACE_TABLE_MAX_TRIANGLES;
+    // A triangle's first vertex and two edges (3 × 12 bytes) and its u32 material.
+    assert_eq!(limits::SURFACE_TABLE_BYTES_PER_TRIANGLE, 40);
+    let table = |mapped: u64| {
+        let e = limits::geometry_estimate(mapped, 5, Backend::Embree, Bvh::Fast);
+        let parts: Vec<f64> = e
+            .parts
+            .iter()
+            .filter(|p| p.of == "of surface table")
+            .map(|p| p.bytes)
+            .collect();
+        let others: f64 = e
+            .parts
+            .iter()
+            .filter(|p| p.of != "of surface table")
+            .map(|p| p.bytes)
+            .sum();
+        assert_eq!(e.total_bytes(), others + parts.iter().sum::<f64>());
+        parts
+    };
+    let most = SURFACE_TABLE_MAX_TRIANGLES as u64;
+    assert_eq!(table(14), [14.0 * 40.0]);
+    // 2.6 MB at the largest table.
+    assert_eq!(table(most), [most as f64 * 40.0]);
+    // Above it, and for prototypes alone, the tracer builds none.
+    assert!(table(most + 1).is_empty());
+    assert!(table(0).is_empty());
+    // A run's check counts it.
+    let dir = temp_dir("surface-table");
+    let scene = luxtally::scene::load(&spheres(&dir, 1, 4)).unwrap();
+    let mapped = scene.geometry.triangle_count() as u64;
+    assert_eq!(mapped, 5120);
+    let mut options = luxtally::run::RunOptions::from_scene(&scene);
+    options.stop.photons = Some(4096);
+    options.bvh = Bvh::Fast;
+    let need = limits::geometry_estimate(mapped, 0, Backend::Embree, Bvh::Fast).total_bytes()
+        + limits::photon_pass_estimate(&scene, &options).total_bytes();
+    let check = |bytes: f64| {
+        let budget = Budget {
+            bytes: Some(bytes as u64),
+            from_flag: true,
+        };
+        limits::check_run(&scene, &options, None, true, &budget)
+    };
+    assert!(check(need).is_ok());
+    // Room for all but half the table's 205 kB: refused.
+    assert!(check(need - 0.5 * table(mapped)[0]).is_err());
+}

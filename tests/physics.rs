@@ -12,26 +12,14 @@ fn point_source_over_black_plane_matches_inverse_square_cosine_law(
     photons: u64,
 ) {
     let s = run_scene_with(
-        r#"
-        [materials.black]
-        reflectance = 0.0
-        [[objects]]
-        shape = "rect"
-        corner = [-10, -10, 0]
-        u = [20, 0, 0]
-        v = [0, 20, 0]
-        material = "black"
+        &format!(
+            r#"{BLACK_FLOOR}
         [[lights]]
         type = "point"
         position = [0.3, -0.2, 2.0]
         intensity_cd = 1000
-        [[receivers]]
-        name = "r"
-        corner = [-1, -1, 0.0001]
-        u = [2, 0, 0]
-        v = [0, 2, 0]
-        cells = [16, 16]
-        "#,
+        {FLOOR_RECEIVER}"#
+        ),
         photons,
         estimator,
     );
@@ -136,26 +124,15 @@ fn integrating_sphere_receiver_reads_direct_plus_uniform_indirect(
 ) {
     let (rho, intensity) = (0.8, 100.0);
     let s = run_scene_with(
-        r#"
-        [materials.coating]
-        reflectance = 0.8
-        [[objects]]
-        shape = "sphere"
-        center = [0, 0, 0]
-        radius = 1.0
-        subdivisions = 4
-        material = "coating"
-        [[lights]]
-        type = "point"
-        position = [0, 0, 0]
-        intensity_cd = 100
+        &(point_in_sphere("coating", "reflectance = 0.8", 4, [0.0, 0.0, 0.0])
+            + r#"
         [[receivers]]
         name = "r"
         corner = [-0.2, 0.2, 0.3]
         u = [0.4, 0, 0]
         v = [0, -0.4, 0]
         cells = [16, 16]
-        "#,
+        "#),
         photons,
         estimator,
     );
@@ -174,52 +151,21 @@ fn luminance_receiver_over_lambertian_floor_reads_rho_e_over_pi(
     estimator: Estimator,
     photons: u64,
 ) {
-    let (rho, intensity, h) = (0.6, 1000.0, 2.0);
     let s = run_scene_with(NEAR_ZONE_METER, photons, estimator);
     let r = &s.receivers["meter"];
     assert_eq!(r.unit, "cd/m2");
-    let exact = |i: usize, j: usize| {
-        let (x0, y0) = (-0.5 + i as f64 / 16.0, -0.5 + j as f64 / 16.0);
-        rho / PI * point_source_cell_lx(intensity, h, x0, x0 + 1.0 / 16.0, y0, y0 + 1.0 / 16.0)
-    };
-    assert_matches(r, exact, "luminance over floor");
+    assert_matches(r, near_zone_meter_cdm2, "luminance over floor");
 }
 
 fn mirror_adds_the_image_of_the_source(estimator: Estimator, photons: u64) {
     // Source 0.5 m above a perfect mirror; a downward-facing receiver 1 m above the source
     // sees the source (1 m away) and its image (2 m away).
     let s = run_scene_with(
-        r#"
-        [materials.mirror]
-        reflectance = 0.0
-        specular_reflectance = 1.0
-        [[objects]]
-        shape = "rect"
-        corner = [-10, -10, 0]
-        u = [20, 0, 0]
-        v = [0, 20, 0]
-        material = "mirror"
-        [[lights]]
-        type = "point"
-        position = [0, 0, 0.5]
-        intensity_cd = 1000
-        [[receivers]]
-        name = "r"
-        corner = [-1, 1, 1.5]
-        u = [2, 0, 0]
-        v = [0, -2, 0]
-        cells = [16, 16]
-        "#,
+        &point_over_mirror("reflectance = 0.0\n    specular_reflectance = 1.0"),
         photons,
         estimator,
     );
-    let w = 2.0 / 16.0;
-    let z = z_scores(&s.receivers["r"], |i, j| {
-        let x0 = -1.0 + i as f64 * w;
-        let y1 = 1.0 - j as f64 * w;
-        point_source_cell_lx(1000.0, 1.0, x0, x0 + w, y1 - w, y1)
-            + point_source_cell_lx(1000.0, 2.0, x0, x0 + w, y1 - w, y1)
-    });
+    let z = z_scores(&s.receivers["r"], mirror_image_cell_lx);
     assert_calibrated(&z, "mirror image");
 }
 
@@ -368,55 +314,8 @@ mod on_a_floor {
 /// I(θ)·h/(h² + r²)^{3/2}, with the smooth profile between `falloff_deg` and `cone_deg`
 /// (the cone reaches the receiver's edge, so cells see the core, the ramp and the dark).
 fn spot_light_over_plane_follows_its_profile(estimator: Estimator, photons: u64) {
-    let (i0, h, cone, falloff) = (2000.0, 2.0, 30.0f64, 15.0f64);
-    let s = run_scene_with(
-        r#"
-        [materials.black]
-        reflectance = 0.0
-        [[objects]]
-        shape = "rect"
-        corner = [-10, -10, 0]
-        u = [20, 0, 0]
-        v = [0, 20, 0]
-        material = "black"
-        [[lights]]
-        type = "spot"
-        position = [0, 0, 2]
-        direction = [0, 0, -1]
-        intensity_cd = 2000
-        cone_deg = 30
-        falloff_deg = 15
-        [[receivers]]
-        name = "r"
-        corner = [-1.5, -1.5, 0.0001]
-        u = [3, 0, 0]
-        v = [0, 3, 0]
-        cells = [16, 16]
-        "#,
-        photons,
-        estimator,
-    );
-    let (cc, cf) = (cone.to_radians().cos(), falloff.to_radians().cos());
-    let h = h - 0.0001;
-    let e = |x: f64, y: f64| {
-        let d2 = h * h + x * x + y * y;
-        let cos = h / d2.sqrt();
-        let s = ((cos - cc) / (cf - cc)).clamp(0.0, 1.0);
-        i0 * s * s * (3.0 - 2.0 * s) * h / d2.powf(1.5)
-    };
-    let w = 3.0 / 16.0;
-    let exact = |i: usize, j: usize| {
-        // 4 × 4 sub-cells of 8 × 8 Gauss points: the profile is only C¹ at its edges.
-        let (x0, y0) = (-1.5 + i as f64 * w, -1.5 + j as f64 * w);
-        let q = w / 4.0;
-        (0..16)
-            .map(|k| {
-                let (a, b) = (x0 + (k % 4) as f64 * q, y0 + (k / 4) as f64 * q);
-                cell_average(e, a, a + q, b, b + q)
-            })
-            .sum::<f64>()
-            / 16.0
-    };
+    let s = run_scene_with(&spot_over_black_floor(), photons, estimator);
+    let exact = spot_cell_lx;
     let r = &s.receivers["r"];
     let peak = exact(8, 8);
     // Cells outside the cone read exactly nothing, with an unknown error. Next-event

@@ -111,15 +111,15 @@ impl Opening {
         }
     }
 
-    /// A point uniformly distributed over the opening (z = 0), metres.
+    /// A point uniformly distributed over the opening (z = 0), metres. A rectangle's is
+    /// [`Opening::point_at`] of two draws; a point draws nothing; discs and ellipses keep
+    /// their rejection sampling (not `point_at`'s concentric map): the same distribution,
+    /// but other points from the same stream, and emission's bits are recorded.
     pub fn sample_point_m(&self, rng: &mut Pcg32) -> DVec3 {
         match *self {
             Opening::Point => DVec3::ZERO,
-            Opening::Rectangle { length_m, width_m } => DVec3::new(
-                (uniform(rng) - 0.5) * length_m,
-                (uniform(rng) - 0.5) * width_m,
-                0.0,
-            ),
+            // Arguments are evaluated left to right: a is drawn first, as before.
+            Opening::Rectangle { .. } => self.point_at(uniform(rng), uniform(rng)),
             Opening::Disc { diameter_m } => disc_point(rng, diameter_m, diameter_m),
             Opening::Ellipse { length_m, width_m } => disc_point(rng, length_m, width_m),
         }

@@ -483,26 +483,33 @@ impl Geometry {
         prototypes: &[PrototypeMesh],
         placements: &[Placement],
     ) -> Geometry {
-        let mut bounds = Bounds::of(vertices);
         // Each prototype centred on its own bounds (f32 vertices), and its centre.
         let (protos, centres): (Vec<Prototype>, Vec<DVec3>) =
             prototypes.iter().map(Prototype::centred).unzip();
+        // The world box of every instance's prototype box corners, transformed once here:
+        // it grows the scene's bounds and, shifted to the local frame, is the instances'.
+        let mut instance_bounds = Bounds::default();
         let placed: Vec<(&Placement, DAffine3)> = placements
             .iter()
             .filter(|pl| !protos[pl.prototype as usize].triangles.is_empty())
             .map(|pl| {
                 let full = pl.world * DAffine3::from_translation(centres[pl.prototype as usize]);
                 for corner in box_corners(protos[pl.prototype as usize].bounds) {
-                    bounds.grow(full.transform_point3(corner));
+                    instance_bounds.grow(full.transform_point3(corner));
                 }
                 (pl, full)
             })
             .collect();
+        let mut bounds = Bounds::of(vertices);
+        if let Some((lo, hi)) = instance_bounds.0 {
+            bounds.grow(lo);
+            bounds.grow(hi);
+        }
         let origin = bounds.centre();
         let mut g = Geometry {
             origin,
             vertices: Shared::padded(local_vertices(vertices, origin)),
-            instanced: Instanced::place(protos, &placed, origin),
+            instanced: Instanced::place(protos, &placed, origin, &instance_bounds),
             ..Geometry::default()
         };
         g.set_mapped_triangles(triangles, material, object);
@@ -664,19 +671,20 @@ fn box_corners((lo, hi): (Vec3, Vec3)) -> impl Iterator<Item = DVec3> {
 impl Instanced {
     /// The instances of `placed` (placement, prototype frame → world) over `prototypes`,
     /// their transforms made relative to the local frame at `origin` in f64 before
-    /// rounding, and the bounds of all of them.
+    /// rounding, and the bounds of all of them from `world_bounds` (theirs in world
+    /// space). Shifting the box equals shifting every corner: x ↦ x − origin is monotone
+    /// in floating point too, so min and max are kept.
     fn place(
         prototypes: Vec<Prototype>,
         placed: &[(&Placement, DAffine3)],
         origin: DVec3,
+        world_bounds: &Bounds,
     ) -> Instanced {
         let mut instanced = Instanced {
             prototypes,
             instances: Vec::with_capacity(placed.len()),
             bounds: (Vec3::ZERO, Vec3::ZERO),
         };
-        let mut ilo = DVec3::splat(f64::INFINITY);
-        let mut ihi = DVec3::splat(f64::NEG_INFINITY);
         for (pl, full) in placed {
             let m = full.matrix3;
             let t = full.translation - origin;
@@ -685,16 +693,12 @@ impl Instanced {
             for (k, c) in cols.iter().enumerate() {
                 to_local[3 * k..3 * k + 3].copy_from_slice(&c.as_vec3().to_array());
             }
-            for corner in box_corners(instanced.prototypes[pl.prototype as usize].bounds) {
-                let p = full.transform_point3(corner) - origin;
-                ilo = ilo.min(p);
-                ihi = ihi.max(p);
-            }
             instanced
                 .instances
                 .push(Instance::new(pl.prototype, pl.object, to_local));
         }
-        if !instanced.instances.is_empty() {
+        if let Some((lo, hi)) = world_bounds.0 {
+            let (ilo, ihi) = (lo - origin, hi - origin);
             // Rounded outwards so that f32 bounds still hold every instance.
             let pad = |x: DVec3| x.abs().max_element() * 1e-6 + f32::MIN_POSITIVE as f64;
             instanced.bounds = (

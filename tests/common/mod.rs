@@ -198,3 +198,182 @@ pub const NEAR_ZONE_METER: &str = r#"
     view_direction = [0, 0, -1]
     half_angle_deg = 30
 "#;
+
+/// A black 20 m × 20 m floor centred on the origin at z = 0: the start of the scenes
+/// whose receivers see only the direct light of their source.
+pub const BLACK_FLOOR: &str = r#"
+    [materials.black]
+    reflectance = 0.0
+    [[objects]]
+    shape = "rect"
+    corner = [-10, -10, 0]
+    u = [20, 0, 0]
+    v = [0, 20, 0]
+    material = "black"
+"#;
+
+/// A receiver "r" of 16 × 16 cells over [−1, 1]², 0.1 mm above a floor at z = 0 (it
+/// reads the floor's incident light, not light the floor reflects).
+pub const FLOOR_RECEIVER: &str = r#"
+    [[receivers]]
+    name = "r"
+    corner = [-1, -1, 0.0001]
+    u = [2, 0, 0]
+    v = [0, 2, 0]
+    cells = [16, 16]
+"#;
+
+/// A spot of 2000 cd 2 m over [`BLACK_FLOOR`], aimed down, with a smooth profile from
+/// `falloff_deg` 15 to `cone_deg` 30, and a 16 × 16 receiver over [−1.5, 1.5]² 0.1 mm
+/// over the floor: the cone reaches the receiver's edge, so cells see the core, the ramp
+/// and the dark. Exact cells: [`spot_cell_lx`].
+pub fn spot_over_black_floor() -> String {
+    format!(
+        r#"{BLACK_FLOOR}
+    [[lights]]
+    type = "spot"
+    position = [0, 0, 2]
+    direction = [0, 0, -1]
+    intensity_cd = 2000
+    cone_deg = 30
+    falloff_deg = 15
+    [[receivers]]
+    name = "r"
+    corner = [-1.5, -1.5, 0.0001]
+    u = [3, 0, 0]
+    v = [0, 3, 0]
+    cells = [16, 16]
+"#
+    )
+}
+
+/// Exact mean illuminance of cell (i, j) of [`spot_over_black_floor`]'s receiver: the cell
+/// average of I(θ)·h/(h² + r²)^{3/2} with the profile's smoothstep between the cosines
+/// of the falloff and cone angles.
+pub fn spot_cell_lx(i: usize, j: usize) -> f64 {
+    let (i0, h, cone, falloff) = (2000.0, 2.0 - 0.0001, 30.0f64, 15.0f64);
+    let (cc, cf) = (cone.to_radians().cos(), falloff.to_radians().cos());
+    let e = |x: f64, y: f64| {
+        let d2 = h * h + x * x + y * y;
+        let cos = h / d2.sqrt();
+        let s = ((cos - cc) / (cf - cc)).clamp(0.0, 1.0);
+        i0 * s * s * (3.0 - 2.0 * s) * h / d2.powf(1.5)
+    };
+    let w = 3.0 / 16.0;
+    subcell_average(e, -1.5 + i as f64 * w, -1.5 + j as f64 * w, w)
+}
+
+/// Mean of f over the square [x0, x0 + w] × [y0, y0 + w] by 4 × 4 sub-squares of 8 × 8
+/// Gauss–Legendre points each: for integrands with kinks or only C¹ edges inside the cell
+/// (a spot's profile, an interpolated intensity table).
+pub fn subcell_average(f: impl Fn(f64, f64) -> f64, x0: f64, y0: f64, w: f64) -> f64 {
+    let q = w / 4.0;
+    (0..16)
+        .map(|k| {
+            let (a, b) = (x0 + (k % 4) as f64 * q, y0 + (k / 4) as f64 * q);
+            cell_average(&f, a, a + q, b, b + q)
+        })
+        .sum::<f64>()
+        / 16.0
+}
+
+/// A 1000 cd point source 0.5 m over a 20 m × 20 m floor of the material `material` (its
+/// `[materials.mirror]` lines), and a 16 × 16 receiver 1.5 m up facing down: an ideal
+/// mirror shows it the source 1 m away plus its image 2 m away ([`mirror_image_cell_lx`]).
+pub fn point_over_mirror(material: &str) -> String {
+    format!(
+        r#"
+    [materials.mirror]
+    {material}
+    [[objects]]
+    shape = "rect"
+    corner = [-10, -10, 0]
+    u = [20, 0, 0]
+    v = [0, 20, 0]
+    material = "mirror"
+    [[lights]]
+    type = "point"
+    position = [0, 0, 0.5]
+    intensity_cd = 1000
+    [[receivers]]
+    name = "r"
+    corner = [-1, 1, 1.5]
+    u = [2, 0, 0]
+    v = [0, -2, 0]
+    cells = [16, 16]
+"#
+    )
+}
+
+/// Exact mean illuminance of cell (i, j) of [`point_over_mirror`]'s receiver under an
+/// ideal mirror: the source at 1 m plus its image at 2 m.
+pub fn mirror_image_cell_lx(i: usize, j: usize) -> f64 {
+    let w = 2.0 / 16.0;
+    let x0 = -1.0 + i as f64 * w;
+    let y1 = 1.0 - j as f64 * w;
+    point_source_cell_lx(1000.0, 1.0, x0, x0 + w, y1 - w, y1)
+        + point_source_cell_lx(1000.0, 2.0, x0, x0 + w, y1 - w, y1)
+}
+
+/// Exact luminance of cell (i, j) of [`NEAR_ZONE_METER`]: L = ρE/π over the cell.
+pub fn near_zone_meter_cdm2(i: usize, j: usize) -> f64 {
+    let (x0, y0) = (-0.5 + i as f64 / 16.0, -0.5 + j as f64 / 16.0);
+    0.6 / std::f64::consts::PI
+        * point_source_cell_lx(1000.0, 2.0, x0, x0 + 1.0 / 16.0, y0, y0 + 1.0 / 16.0)
+}
+
+/// A 100 cd point source at `source` inside a unit sphere (icosphere of `subdivisions`)
+/// made of the material `name`, whose table holds the lines `material`: the integrating
+/// sphere and the furnace, where every photon stays inside.
+pub fn point_in_sphere(name: &str, material: &str, subdivisions: u32, source: [f64; 3]) -> String {
+    let [x, y, z] = source;
+    format!(
+        r#"
+    [materials.{name}]
+    {material}
+    [[objects]]
+    shape = "sphere"
+    center = [0, 0, 0]
+    radius = 1.0
+    subdivisions = {subdivisions}
+    material = "{name}"
+    [[lights]]
+    type = "point"
+    position = [{x}, {y}, {z}]
+    intensity_cd = 100
+"#
+    )
+}
+
+/// A point source 2 m over [`BLACK_FLOOR`], a black occluder at 1 m whose straight edge is
+/// slanted at [`SHADOW_ANGLE_DEG`] to the cells of [`FLOOR_RECEIVER`] (0.1 mm over the
+/// floor), which is lit where n·(x, y) ≥ [`SHADOW_C`], n = (cos, sin) of the angle.
+pub const SHADOW_ANGLE_DEG: f64 = 20.0;
+pub const SHADOW_C: f64 = 0.23;
+
+pub fn shadow_scene() -> String {
+    let a = SHADOW_ANGLE_DEG.to_radians();
+    let (n, t) = ((a.cos(), a.sin()), (-a.sin(), a.cos()));
+    let c_o = SHADOW_C / 1.9999;
+    let p0 = (n.0 * c_o - 10.0 * t.0, n.1 * c_o - 10.0 * t.1);
+    format!(
+        r#"{BLACK_FLOOR}
+    [[objects]]
+    shape = "rect"
+    corner = [{}, {}, 1.0]
+    u = [{}, {}, 0]
+    v = [{}, {}, 0]
+    material = "black"
+    [[lights]]
+    type = "point"
+    position = [0, 0, 2]
+    intensity_cd = 1000
+{FLOOR_RECEIVER}"#,
+        p0.0,
+        p0.1,
+        20.0 * t.0,
+        20.0 * t.1,
+        -10.0 * n.0,
+        -10.0 * n.1
+    )
+}
