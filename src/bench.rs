@@ -834,17 +834,24 @@ pub enum ScaleCase {
     Instanced(u64),
     /// The procedural scene with at least this many (mapped) triangles.
     Flattened(u64),
+    /// The same scene loaded from a GLB file (written before the clock starts), as a
+    /// user's mesh would be.
+    Glb(u64),
 }
 
 impl std::str::FromStr for ScaleCase {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
-        let bad = || Error::input("--case", format!("`{s}` is not instanced:N or flattened:N"));
+        let bad = || {
+            let expected = "instanced:N, flattened:N or glb:N";
+            Error::input("--case", format!("`{s}` is not {expected}"))
+        };
         let (kind, n) = s.split_once(':').ok_or_else(bad)?;
         let n: u64 = n.parse().map_err(|_| bad())?;
         match kind {
             "instanced" => Ok(ScaleCase::Instanced(n)),
             "flattened" => Ok(ScaleCase::Flattened(n)),
+            "glb" => Ok(ScaleCase::Glb(n)),
             _ => Err(bad()),
         }
     }
@@ -855,6 +862,7 @@ impl std::fmt::Display for ScaleCase {
         match self {
             ScaleCase::Instanced(n) => write!(f, "instanced:{n}"),
             ScaleCase::Flattened(n) => write!(f, "flattened:{n}"),
+            ScaleCase::Glb(n) => write!(f, "glb:{n}"),
         }
     }
 }
@@ -948,6 +956,103 @@ intensity_cd = 1000
     crate::scene::load_str(&text, Path::new("."), "bench-scale.toml")
 }
 
+/// The procedural scene written as a binary glTF file in the temporary directory
+/// (removed on drop), and the point light [`lit_scene`] would give it.
+struct ProceduralGlb {
+    path: std::path::PathBuf,
+    light: DVec3,
+}
+
+impl ProceduralGlb {
+    fn write(min_triangles: usize) -> Result<ProceduralGlb> {
+        let (vertices, triangles) = procedural_mesh(min_triangles);
+        let path =
+            std::env::temp_dir().join(format!("luxtally-bench-scale-{}.glb", std::process::id()));
+        write_glb(&path, &vertices, &triangles)?;
+        let (lo, hi) = vertices.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), v| (lo.min(*v), hi.max(*v)),
+        );
+        let light = DVec3::new(
+            (lo.x + hi.x) / 2.0,
+            (lo.y + hi.y) / 2.0,
+            hi.z - 0.1 * (hi.z - lo.z),
+        );
+        Ok(ProceduralGlb { path, light })
+    }
+
+    /// The file through the scene loader, lit as [`lit_scene`] lights the generated one.
+    fn scene(&self) -> Result<crate::scene::Scene> {
+        let text = format!(
+            "name = \"glb\"\n[materials.grey]\nreflectance = 0.5\n\
+             [[objects]]\nfile = \"{}\"\nmaterial = \"grey\"\n\
+             [[lights]]\ntype = \"point\"\nposition = [{}, {}, {}]\nintensity_cd = 1000\n",
+            self.path.display().to_string().replace('\\', "/"),
+            self.light.x,
+            self.light.y,
+            self.light.z
+        );
+        crate::scene::load_str(&text, Path::new("."), "bench-scale.toml")
+    }
+}
+
+impl Drop for ProceduralGlb {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// Writes one mesh (f32 positions, u32 indices, one node) as a binary glTF file.
+pub fn write_glb(path: &Path, vertices: &[DVec3], triangles: &[[u32; 3]]) -> Result<()> {
+    use std::io::Write;
+    let mut bin: Vec<u8> = Vec::with_capacity(12 * (vertices.len() + triangles.len()));
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for v in vertices {
+        let v = v.as_vec3();
+        (lo, hi) = (lo.min(v), hi.max(v));
+        for c in v.to_array() {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    let positions_len = bin.len();
+    for i in triangles.iter().flatten() {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let json = format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],"buffers":[{{"byteLength":{total}}}],"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{positions_len}}},{{"buffer":0,"byteOffset":{positions_len},"byteLength":{indices_len}}}],"accessors":[{{"bufferView":0,"componentType":5126,"count":{vertex_count},"type":"VEC3","min":[{},{},{}],"max":[{},{},{}]}},{{"bufferView":1,"componentType":5125,"count":{index_count},"type":"SCALAR"}}]}}"#,
+        lo.x,
+        lo.y,
+        lo.z,
+        hi.x,
+        hi.y,
+        hi.z,
+        total = bin.len(),
+        indices_len = bin.len() - positions_len,
+        vertex_count = vertices.len(),
+        index_count = 3 * triangles.len(),
+    );
+    // Chunks are 4-byte aligned: JSON padded with spaces (the binary chunk already is).
+    let mut json = json.into_bytes();
+    json.resize(json.len().next_multiple_of(4), b' ');
+    let length = 12 + 8 + json.len() + 8 + bin.len();
+    let fail = |e| Error::io(path, e);
+    let mut out = std::io::BufWriter::new(std::fs::File::create(path).map_err(fail)?);
+    let length = u32::try_from(length)
+        .map_err(|_| Error::Unsupported(format!("{}: over 4 GiB", path.display())))?;
+    out.write_all(b"glTF").map_err(fail)?;
+    out.write_all(&2u32.to_le_bytes()).map_err(fail)?;
+    out.write_all(&length.to_le_bytes()).map_err(fail)?;
+    out.write_all(&(json.len() as u32).to_le_bytes())
+        .map_err(fail)?;
+    out.write_all(b"JSON").map_err(fail)?;
+    out.write_all(&json).map_err(fail)?;
+    out.write_all(&(bin.len() as u32).to_le_bytes())
+        .map_err(fail)?;
+    out.write_all(b"BIN\0").map_err(fail)?;
+    out.write_all(&bin).map_err(fail)?;
+    out.flush().map_err(fail)
+}
+
 /// Runs one case in this process with the `bvh` layout: set-up, raw rays, photons, peak
 /// RSS.
 pub fn bench_scale_case(
@@ -960,12 +1065,19 @@ pub fn bench_scale_case(
     use crate::run::{run_from, RunOptions, Start};
     use crate::scene::Estimator;
     use std::sync::atomic::AtomicBool;
+    // A GLB case's file is written before the clock starts: its loading is timed.
+    let glb = match case {
+        ScaleCase::Glb(n) => Some(ProceduralGlb::write(n as usize)?),
+        _ => None,
+    };
     let (rss_before_mib, _) = memory_mib();
     let cpu_before_s = process_cpu_seconds();
     let start = Instant::now();
-    let scene = match case {
-        ScaleCase::Instanced(n) => instanced_scene(mesh, n)?,
-        ScaleCase::Flattened(n) => lit_scene("flattened", procedural_geometry(n as usize)),
+    let scene = match (case, &glb) {
+        (ScaleCase::Instanced(n), _) => instanced_scene(mesh, n)?,
+        (ScaleCase::Flattened(n), _) => lit_scene("flattened", procedural_geometry(n as usize)),
+        (ScaleCase::Glb(_), Some(file)) => file.scene()?,
+        (ScaleCase::Glb(_), None) => unreachable!("written above"),
     };
     let load_s = start.elapsed().as_secs_f64();
     let load_cpu_s = process_cpu_seconds() - cpu_before_s;

@@ -103,7 +103,8 @@ enum Command {
         /// Largest flattened triangle count (a power of ten).
         #[arg(long, default_value_t = 100_000_000)]
         max_triangles: u64,
-        /// Run one case in this process (instanced:N or flattened:N) and print its JSON.
+        /// Run one case in this process (instanced:N, flattened:N, or glb:N: the flattened
+        /// scene loaded from a GLB file written first) and print its JSON.
         #[arg(long)]
         case: Option<String>,
         /// BVH layout: auto (fast when the memory available holds it), fast or compact.

@@ -482,3 +482,36 @@ fn name_defaults_to_the_file_stem_and_seed_to_1() {
     assert_eq!(s.simulation.seed, 1);
     assert_eq!(s.geometry.triangle_count(), 0);
 }
+
+/// bench-scale's `glb:N` case: the procedural mesh written by `bench::write_glb` loads
+/// back through the scene loader as the same triangles, vertices rounded to f32 as the
+/// generated scene's own are.
+#[test]
+fn a_written_glb_loads_back_as_the_same_mesh() {
+    use luxtally::bench::{procedural_geometry, procedural_mesh, write_glb};
+    let (vertices, triangles) = procedural_mesh(20_000);
+    let dir = std::env::temp_dir().join(format!("luxtally-glb-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("procedural.glb");
+    write_glb(&path, &vertices, &triangles).unwrap();
+    let toml = "[materials.m]\nreflectance = 0.5\n[[objects]]\nfile = \"procedural.glb\"\nmaterial = \"m\"\n";
+    let loaded = luxtally::scene::load_str(toml, &dir, "glb.toml")
+        .unwrap()
+        .geometry;
+    std::fs::remove_dir_all(&dir).unwrap();
+    let generated = procedural_geometry(20_000);
+    assert_eq!(loaded.triangle_count(), generated.triangle_count());
+    assert_eq!(&loaded.triangles[..], &generated.triangles[..]);
+    for (k, (a, b)) in loaded
+        .vertices
+        .iter()
+        .zip(generated.vertices.iter())
+        .enumerate()
+    {
+        let (a, b) = (
+            a.as_dvec3() + loaded.origin,
+            b.as_dvec3() + generated.origin,
+        );
+        assert!((a - b).length() < 1e-5, "vertex {k}: {a} against {b}");
+    }
+}
