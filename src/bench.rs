@@ -1009,7 +1009,10 @@ pub fn write_glb(path: &Path, vertices: &[DVec3], triangles: &[[u32; 3]]) -> Res
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for v in vertices {
         let v = v.as_vec3();
-        (lo, hi) = (lo.min(v), hi.max(v));
+        // The accessor's bounds must be numbers in the JSON, whatever the vertices.
+        if v.is_finite() {
+            (lo, hi) = (lo.min(v), hi.max(v));
+        }
         for c in v.to_array() {
             bin.extend_from_slice(&c.to_le_bytes());
         }

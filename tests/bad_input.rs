@@ -376,3 +376,35 @@ fn mutated_scene_and_mesh_files_never_panic() {
         }
     }
 }
+
+/// A GLB whose vertex is not finite, or whose index points past its vertices: the
+/// loader's parallel path for tightly packed data names the culprit as the per-item
+/// path does (the first bad vertex or index).
+#[test]
+fn glb_with_a_bad_vertex_or_index_names_it() {
+    use glam::DVec3;
+    let v = [
+        DVec3::ZERO,
+        DVec3::X,
+        DVec3::Y,
+        DVec3::new(1.0, 1.0, f64::NAN),
+    ];
+    let cases: [(&[DVec3], &[[u32; 3]], &str); 2] = [
+        (&v, &[[0, 1, 2], [1, 3, 2]], "is not finite"),
+        (
+            &v[..3],
+            &[[0, 1, 2], [0, 2, 7]],
+            "index 7 out of range (3 vertices)",
+        ),
+    ];
+    for (k, (vertices, triangles, what)) in cases.iter().enumerate() {
+        let glb = temp_path(&format!("bad{k}.glb"));
+        luxtally::bench::write_glb(&glb, vertices, triangles).unwrap();
+        let m = error_of(&format!(
+            "{GREY}[[objects]]\nfile = \"{}\"\nmaterial = \"grey\"\n",
+            glb.display()
+        ));
+        let _ = std::fs::remove_file(&glb);
+        assert_has(&m, &["objects[0].file", &format!("bad{k}.glb"), what]);
+    }
+}
