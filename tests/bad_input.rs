@@ -389,7 +389,8 @@ fn glb_with_a_bad_vertex_or_index_names_it() {
         DVec3::Y,
         DVec3::new(1.0, 1.0, f64::NAN),
     ];
-    let cases: [(&[DVec3], &[[u32; 3]], &str); 2] = [
+    type Case<'a> = (&'a [DVec3], &'a [[u32; 3]], &'a str);
+    let cases: [Case; 2] = [
         (&v, &[[0, 1, 2], [1, 3, 2]], "is not finite"),
         (
             &v[..3],
