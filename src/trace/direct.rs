@@ -209,7 +209,7 @@ pub struct DirectLight<'a> {
 impl DirectLight<'_> {
     /// Points per side of each cell of `grid` in a replicate: [`points_per_side`], times
     /// [`EDGE_REFINEMENT`] where [`crosses_light_edge`]. The lights and the geometry
-    /// alone decide it, so a run computes it once (in parallel over cells).
+    /// alone decide it, so a run computes it once (in parallel over bands of rows).
     pub fn cell_sides(&self, grid: &ReceiverGrid) -> Vec<u32> {
         let m = points_per_side(grid.cell_count());
         let [nu, nv] = grid.cells;
