@@ -20,6 +20,29 @@ pub fn photon_stream(seed: u64, index: u64) -> Pcg32 {
     Pcg32::new(state, stream)
 }
 
+/// The streams of photons `first`, `first + 1`, … of a run seeded with `seed`, handed to
+/// the emitters: each photon's stream is seeded in the loop that takes its emission
+/// draws (one pass over the batch, not a seeding pass whose streams the emission then
+/// reads back).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PhotonStreams {
+    seed: u64,
+    /// Index of the batch's first photon.
+    pub first: u64,
+}
+
+impl PhotonStreams {
+    pub fn new(seed: u64, first: u64) -> Self {
+        PhotonStreams { seed, first }
+    }
+
+    /// The stream of photon `first + k`.
+    #[inline(always)]
+    pub fn get(&self, k: usize) -> Pcg32 {
+        photon_stream(self.seed, self.first + k as u64)
+    }
+}
+
 /// A stream for a purpose other than photons (tests, benchmarks), seeded from `seed`.
 pub fn aux_stream(seed: u64) -> Pcg32 {
     Pcg32::seed_from_u64(mix64(seed ^ 0xdead_beef_cafe_f00d))
