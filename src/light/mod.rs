@@ -22,6 +22,7 @@
 use crate::error::{Error, Result};
 use crate::input;
 use crate::photometry::Photometry;
+use crate::rng::PhotonStreams;
 use glam::DVec3;
 use rand_pcg::Pcg32;
 use serde::de::DeserializeOwned;
@@ -85,14 +86,24 @@ pub trait Emitter: Debug + Send + Sync {
     /// density (the flux weight is Φ_total / N, shared by every photon).
     fn sample_emission(&self, rng: &mut Pcg32) -> (DVec3, DVec3);
 
-    /// [`Emitter::sample_emission`] for a batch of photons, photon k from `rngs[k]`,
-    /// written as f32 origins `o` and directions `d` (what the ray caster takes). A
-    /// source whose sampling vectorises draws its numbers in one loop and maps them in
-    /// another; by default, photon by photon.
-    fn sample_emission_lanes(&self, rngs: &mut [Pcg32], o: [&mut [f32]; 3], d: [&mut [f32]; 3]) {
+    /// [`Emitter::sample_emission`] for a batch of `rngs.len()` photons: photon k draws
+    /// from `streams.get(k)`, which is left in `rngs[k]` after its draws (the photon
+    /// goes on drawing from it), and its origin and direction are written as f32 lanes
+    /// `o` and `d` (what the ray caster takes). A source whose sampling vectorises seeds
+    /// and draws in one loop and maps the numbers in another; by default, photon by
+    /// photon.
+    fn sample_emission_lanes(
+        &self,
+        streams: PhotonStreams,
+        rngs: &mut [Pcg32],
+        o: [&mut [f32]; 3],
+        d: [&mut [f32]; 3],
+    ) {
         let ([ox, oy, oz], [dx, dy, dz]) = (o, d);
-        for (k, rng) in rngs.iter_mut().enumerate() {
-            let (p, w) = self.sample_emission(rng);
+        for (k, slot) in rngs.iter_mut().enumerate() {
+            let mut rng = streams.get(k);
+            let (p, w) = self.sample_emission(&mut rng);
+            *slot = rng;
             let (p, w) = (p.as_vec3(), w.as_vec3());
             (ox[k], oy[k], oz[k]) = (p.x, p.y, p.z);
             (dx[k], dy[k], dz[k]) = (w.x, w.y, w.z);

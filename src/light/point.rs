@@ -5,6 +5,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::input::{amount, required, vec3};
+use crate::rng::PhotonStreams;
 use crate::sampling::{sphere_from_square, uniform_f32, uniform_sphere};
 use glam::DVec3;
 use rand_pcg::Pcg32;
@@ -80,9 +81,16 @@ impl Emitter for PointEmitter {
         (self.position, uniform_sphere(rng))
     }
 
-    /// Uniform directions in f32 lanes: the draws in one loop, then the branch-free
-    /// concentric map and lift ([`sphere_from_square`]) in one that vectorises.
-    fn sample_emission_lanes(&self, rngs: &mut [Pcg32], o: [&mut [f32]; 3], d: [&mut [f32]; 3]) {
+    /// Uniform directions in f32 lanes: each photon's stream seeded and its two draws
+    /// taken in one loop, then the branch-free concentric map and lift
+    /// ([`sphere_from_square`]) in one that vectorises.
+    fn sample_emission_lanes(
+        &self,
+        streams: PhotonStreams,
+        rngs: &mut [Pcg32],
+        o: [&mut [f32]; 3],
+        d: [&mut [f32]; 3],
+    ) {
         let p = self.position.as_vec3();
         for (o, p) in o.into_iter().zip([p.x, p.y, p.z]) {
             o[..rngs.len()].fill(p);
@@ -90,11 +98,14 @@ impl Emitter for PointEmitter {
         const LANES: usize = 64;
         let [dx, dy, dz] = d;
         let blocks = rngs.chunks_mut(LANES).zip(dx.chunks_mut(LANES));
-        for ((rngs, dx), (dy, dz)) in blocks.zip(dy.chunks_mut(LANES).zip(dz.chunks_mut(LANES))) {
+        let blocks = blocks.zip(dy.chunks_mut(LANES).zip(dz.chunks_mut(LANES)));
+        for (b, ((rngs, dx), (dy, dz))) in blocks.enumerate() {
             let (mut u, mut v) = ([0.0_f32; LANES], [0.0_f32; LANES]);
-            for ((rng, u), v) in rngs.iter_mut().zip(&mut u).zip(&mut v) {
-                *u = uniform_f32(rng);
-                *v = uniform_f32(rng);
+            for (i, ((slot, u), v)) in rngs.iter_mut().zip(&mut u).zip(&mut v).enumerate() {
+                let mut rng = streams.get(b * LANES + i);
+                *u = uniform_f32(&mut rng);
+                *v = uniform_f32(&mut rng);
+                *slot = rng;
             }
             let n = rngs.len();
             for k in 0..n.min(dx.len()).min(dy.len()).min(dz.len()) {

@@ -3,6 +3,7 @@
 //! What each kind emits lives in `crate::light`; nothing here knows the kinds.
 
 use crate::light::{BoundingSphere, Emitter, Incoming};
+use crate::rng::PhotonStreams;
 use crate::scene::Scene;
 use glam::DVec3;
 use rand_pcg::Pcg32;
@@ -69,22 +70,25 @@ impl Emitters {
             .unwrap_or(self.cdf.len().saturating_sub(1))
     }
 
-    /// Origins and directions (f32, for the ray caster) of the photons `first`,
-    /// `first + 1`, … drawn from `rngs` (one stream each): in lanes when one light emits
-    /// them all ([`Emitter::sample_emission_lanes`]), else photon by photon.
+    /// Origins and directions (f32, for the ray caster) of the photons `streams.first`,
+    /// `streams.first + 1`, …, one per slot of `rngs`, each drawn from its own stream,
+    /// which is left in its slot: in lanes when one light emits them all
+    /// ([`Emitter::sample_emission_lanes`]), else photon by photon.
     pub fn sample_lanes(
         &self,
-        first: u64,
+        streams: PhotonStreams,
         rngs: &mut [Pcg32],
         o: [&mut [f32]; 3],
         d: [&mut [f32]; 3],
     ) {
         if let [emitter] = &self.emitters[..] {
-            return emitter.sample_emission_lanes(rngs, o, d);
+            return emitter.sample_emission_lanes(streams, rngs, o, d);
         }
         let ([ox, oy, oz], [dx, dy, dz]) = (o, d);
-        for (k, rng) in rngs.iter_mut().enumerate() {
-            let (p, w) = self.sample(self.light_of(first + k as u64), rng);
+        for (k, slot) in rngs.iter_mut().enumerate() {
+            let mut rng = streams.get(k);
+            let (p, w) = self.sample(self.light_of(streams.first + k as u64), &mut rng);
+            *slot = rng;
             let (p, w) = (p.as_vec3(), w.as_vec3());
             (ox[k], oy[k], oz[k]) = (p.x, p.y, p.z);
             (dx[k], dy[k], dz[k]) = (w.x, w.y, w.z);

@@ -20,7 +20,7 @@ pub mod receiver;
 pub mod scatter;
 
 use crate::accel::{HitBatch, RayBatch, RayCaster, Surface};
-use crate::rng::photon_stream;
+use crate::rng::PhotonStreams;
 use crate::sampling::{cosine_from_square, uniform_f32};
 use crate::scene::{Estimator, Geometry, Scene};
 use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid, Tallies};
@@ -214,12 +214,19 @@ impl<'a> SurvivorLanes<'a> {
         segment: Segment,
         rng: Pcg32,
     ) {
+        self.write_unsegmented(j, point, side, offset, rng);
+        self.segment[j] = segment;
+    }
+
+    /// [`Self::write`] leaving the segment lane as it is: for a pass whose segments no
+    /// receiver reads ([`Tracer::lambert_track`]).
+    #[inline(always)]
+    fn write_unsegmented(&mut self, j: usize, point: Vec3, side: Vec3, offset: u32, rng: Pcg32) {
         let [ox, oy, oz] = &mut self.origin;
         (ox[j], oy[j], oz[j]) = (point.x, point.y, point.z);
         let [sx, sy, sz] = &mut self.side;
         (sx[j], sy[j], sz[j]) = (side.x, side.y, side.z);
         self.offset[j] = offset;
-        self.segment[j] = segment;
         self.rng[j] = rng;
     }
 }
@@ -389,12 +396,12 @@ impl<'a> Tracer<'a> {
         lanes.bounces = 0;
         lanes.segment.resize(live, Segment::Emitted);
         scratch.pending.clear();
-        // Streams first, then emission: two short loops whose iterations overlap.
         lanes.offset.extend(0..live as u32);
-        let seed = self.seed;
-        (lanes.rng).extend((0..live as u64).map(|offset| photon_stream(seed, first + offset)));
+        // Each photon's stream is seeded where its emission draws from it.
+        lanes.rng.resize(live, Pcg32::new(0, 0));
+        let streams = PhotonStreams::new(self.seed, first);
         self.emitters.sample_lanes(
-            first,
+            streams,
             &mut lanes.rng,
             [&mut rays.ox, &mut rays.oy, &mut rays.oz],
             [&mut rays.dx, &mut rays.dy, &mut rays.dz],
@@ -527,7 +534,19 @@ impl<'a> Tracer<'a> {
                 ended += 1;
                 continue;
             }
-            if LAMBERT_TRACK || surfacing.lambert_only {
+            if LAMBERT_TRACK {
+                // As below, with less to keep: every survivor scatters diffusely (so
+                // survivor j is diffuse survivor j, and pass 3 reads no slots), a hit
+                // that is not kept ended (counted after the loop), and the segment lane
+                // is left as it is: with no receiver connecting, every segment scores by
+                // crossing whatever it started at.
+                let mut rng = out.rng[k].clone();
+                let survives = (rng.next_u32() as u64) < surfacing.survives_below;
+                out.write_unsegmented(j, p, facing, offset, rng);
+                j += survives as usize;
+                continue;
+            }
+            if surfacing.lambert_only {
                 // `Bsdf::sample`'s roulette and diffuse lobe for a material with no other
                 // lobe: the same draws (the direction's in f32 in pass 3, into the hemisphere
                 // the photon arrived from). The slot is written whatever the roulette says
@@ -554,6 +573,11 @@ impl<'a> Tracer<'a> {
             let segment = Segment::after(sample.kind, surfacing.glossy_connectable);
             out.write(j, p, side, offset, segment, rng);
             j += 1;
+        }
+        if LAMBERT_TRACK && !capped {
+            // Each hit escaped, survived or ended.
+            ended = (n - j) as u64 - escaped;
+            m = j;
         }
         tally.deposits.truncate(first_deposit + d);
         tally.record_histories(hit_bounces, escaped);
