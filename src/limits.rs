@@ -20,9 +20,11 @@ use crate::run::RunOptions;
 use crate::scene::file::{self, Source};
 use crate::scene::{Camera, Scene};
 use crate::tally::{CellPartial, CellSums, CODES_PER_TRIANGLE};
+/// The tracer's per-triangle hit-surface table, counted for runs of up to
+/// [`SURFACE_TABLE_MAX_TRIANGLES`] mapped triangles (≤ 2.6 MB).
+pub use crate::trace::SURFACE_TABLE_BYTES_PER_TRIANGLE;
 use crate::trace::{CHUNK_PHOTONS, SURFACE_TABLE_MAX_TRIANGLES};
 use crate::{Error, Result};
-use glam::Vec3;
 use std::mem::size_of;
 use std::path::Path;
 
@@ -44,13 +46,6 @@ pub const GEOMETRY_BYTES_PER_TRIANGLE_EMBREE_COMPACT: f64 = 76.0;
 /// The same with obvhs (its CWBVH build holds more while it builds): 1514 and 2994 MiB
 /// for the same scenes as Embree's, 296 bytes per triangle, less the triangle maps' 32.
 pub const GEOMETRY_BYTES_PER_TRIANGLE_OBVHS: f64 = 264.0;
-
-/// The tracer's per-triangle hit-surface table (bytes per mapped triangle): the private
-/// `trace::TriangleSurface`, a triangle's first vertex, its two edges and its material
-/// (keep in step with it). Built only up to [`SURFACE_TABLE_MAX_TRIANGLES`] mapped
-/// triangles (≤ 2.6 MB), so the geometry constants above, measured on millions of
-/// triangles, do not hold it.
-pub const SURFACE_TABLE_BYTES_PER_TRIANGLE: usize = 3 * size_of::<Vec3>() + size_of::<u32>();
 
 /// Per instance of a `map = false` object (bytes): Embree's instance geometry and its
 /// share of the top-level BVH, our `Instance` (transform, normal matrix, bounds).

@@ -238,6 +238,9 @@ impl<'a> SurvivorLanes<'a> {
 /// the ray caster dominate anyway.
 pub const SURFACE_TABLE_MAX_TRIANGLES: usize = 1 << 16;
 
+/// Bytes per triangle of that table (`limits` counts it in a run's memory).
+pub const SURFACE_TABLE_BYTES_PER_TRIANGLE: usize = std::mem::size_of::<TriangleSurface>();
+
 /// A triangle's first vertex, its two edges from it and its material, for
 /// [`Surface::mapped`] (as [`crate::accel::HitBatch::surface`] calls it: the same bits),
 /// one load from the triangle id instead of two dependent ones.
