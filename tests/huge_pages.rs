@@ -1,5 +1,6 @@
 //! A large Embree build runs with transparent huge pages off and leaves them on, with the
-//! BVH collapsed into huge pages in the background (`accel::huge_pages`). One test: the
+//! BVH collapsed into huge pages in the background (`accel::huge_pages`); a large obvhs
+//! BVH is collapsed after its build too. One test: the
 //! switch is process-wide, so its cases must not run concurrently.
 
 use luxtally::accel::embree::EmbreeScene;
@@ -51,9 +52,24 @@ fn large_builds_defer_huge_pages_and_leave_them_on() {
     );
     drop(scene);
 
+    // The obvhs BVH (4 KiB pages as built) is advised and collapsed after its build.
+    #[cfg(feature = "obvhs")]
+    {
+        let before = anon_huge_bytes();
+        let scene = luxtally::accel::bvh::ObvhsScene::new(&geometry);
+        let collapse = wait_for_collapse().expect("a large obvhs build starts a collapse");
+        assert!(
+            collapse.huge_bytes >= before + (32 << 20),
+            "the obvhs BVH is not in huge pages: {before} bytes before, {collapse:?}"
+        );
+        drop(scene);
+    }
+
     // A process that had huge pages off keeps them off, and nothing is collapsed.
     assert!(set_huge_pages(false));
     drop(EmbreeScene::new(&geometry).unwrap());
+    #[cfg(feature = "obvhs")]
+    drop(luxtally::accel::bvh::ObvhsScene::new(&geometry));
     assert!(!huge_pages_enabled(), "the process's own choice must stand");
     assert_eq!(wait_for_collapse(), None);
     assert!(set_huge_pages(true));

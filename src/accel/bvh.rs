@@ -187,12 +187,23 @@ pub struct ObvhsScene {
 impl ObvhsScene {
     /// Builds the BVHs (obvhs `medium_build`).
     pub fn new(geometry: &Geometry) -> ObvhsScene {
-        ObvhsScene {
+        let scene = ObvhsScene {
             flat: Blas::new(&geometry.vertices, &geometry.triangles),
             vertices: geometry.vertices.clone(),
             triangles: geometry.triangles.clone(),
             two_level: TwoLevel::new(geometry),
+        };
+        // What every ray reads, in huge pages (collapsed in the background) as Embree's
+        // BVH is: in 4 KiB pages a large BVH's rays lose to TLB misses.
+        if geometry.triangles.len() >= super::huge_pages::DEFER_FROM_TRIANGLES {
+            super::huge_pages::advise(&[
+                address_range(&scene.flat.bvh.nodes),
+                address_range(&scene.flat.tris),
+                address_range(&scene.vertices),
+                address_range(&scene.triangles),
+            ]);
         }
+        scene
     }
 
     /// The obvhs ray for ray `i`, its direction shortened by `DIR_SCALE` (see there).
@@ -394,4 +405,9 @@ impl RayCaster for ObvhsScene {
     fn default_occluded_api(&self) -> RayApi {
         RayApi::Single
     }
+}
+
+/// Where a slice lies in memory: (start address, bytes).
+fn address_range<T>(items: &[T]) -> (usize, usize) {
+    (items.as_ptr() as usize, std::mem::size_of_val(items))
 }

@@ -11,7 +11,10 @@
 //! the memory Embree asked huge pages for — the BVH — into huge pages (`MADV_COLLAPSE`,
 //! Linux ≥ 6.1) while the first photons trace. Rays are right either way: collapsing
 //! moves pages, never their contents. Where the process already had huge pages off, or
-//! the kernel cannot collapse (checked once, on a scratch page), nothing changes.
+//! the kernel cannot collapse (checked once, on a scratch page), nothing changes. The
+//! obvhs backend allocates its BVH without asking for huge pages: [`advise`] asks for
+//! them after its build and collapses them the same way (10⁷ triangles: its rays
+//! 0.29 → 0.36 Mrays/s on one thread).
 //!
 //! The module's `unsafe` (two `prctl`s, `madvise`, `mmap`) is the one exception to
 //! "`unsafe` only in the Embree wrapper": it is about Embree's memory, not its API.
@@ -83,14 +86,39 @@ impl Drop for Deferred {
         let mut state = DEFERRING.lock().unwrap_or_else(|e| e.into_inner());
         state.builds -= 1;
         if state.builds == 0 && std::mem::take(&mut state.turned_off) && sys::set_huge_pages(true) {
-            let previous = PENDING
-                .lock()
-                .unwrap_or_else(|e| e.into_inner())
-                .replace(std::thread::spawn(collapse_now));
-            // A collapse still running covers older regions only: let it finish alone.
-            drop(previous);
+            collapse_in_background();
         }
     }
+}
+
+/// Asks huge pages for the whole 2 MiB pages inside each of `ranges` (start, bytes):
+/// memory a backend built in 4 KiB pages (no `MADV_HUGEPAGE` of its own, as the obvhs
+/// BVH) and reads on every ray. They are collapsed in the background
+/// ([`wait_for_collapse`]) where the process has huge pages on and the kernel can
+/// collapse; elsewhere nothing changes.
+pub fn advise(ranges: &[(usize, usize)]) {
+    const HUGE: usize = 2 << 20;
+    if !(sys::huge_pages_enabled() && can_collapse()) {
+        return;
+    }
+    let mut advised = false;
+    for &(start, bytes) in ranges {
+        let (lo, hi) = (start.next_multiple_of(HUGE), (start + bytes) / HUGE * HUGE);
+        advised |= hi > lo && sys::advise_huge_pages(lo, hi - lo);
+    }
+    if advised {
+        collapse_in_background();
+    }
+}
+
+/// Collapses every region that asked for huge pages, on a thread of its own.
+fn collapse_in_background() {
+    let previous = PENDING
+        .lock()
+        .unwrap_or_else(|e| e.into_inner())
+        .replace(std::thread::spawn(collapse_now));
+    // A collapse still running covers older regions only: let it finish alone.
+    drop(previous);
 }
 
 /// Waits for the background collapse, if one is running or finished unseen: what it did.
@@ -185,6 +213,13 @@ mod sys {
         unsafe { libc::prctl(libc::PR_SET_THP_DISABLE, off, NONE, NONE, NONE) == 0 }
     }
 
+    /// Marks `bytes` from `start` (whole huge pages) as wanting huge pages.
+    pub fn advise_huge_pages(start: usize, bytes: usize) -> bool {
+        // SAFETY: MADV_HUGEPAGE is advice on the pages behind memory, never its contents;
+        // a range not mapped fails the call.
+        unsafe { libc::madvise(start as *mut libc::c_void, bytes, libc::MADV_HUGEPAGE) == 0 }
+    }
+
     /// Asks the kernel to back `bytes` from `start` with huge pages now.
     pub fn collapse(start: usize, bytes: usize) -> bool {
         // SAFETY: MADV_COLLAPSE never changes the contents of memory, only the pages
@@ -228,6 +263,9 @@ mod sys {
         false
     }
     pub fn collapse(_start: usize, _bytes: usize) -> bool {
+        false
+    }
+    pub fn advise_huge_pages(_start: usize, _bytes: usize) -> bool {
         false
     }
     pub fn collapse_works() -> bool {
