@@ -546,36 +546,44 @@ fn cells_a_cone_edge_crosses_are_refined_and_no_others() {
 
 /// The cells the occluder's shadow edge crosses ([`shadow_scene`]: a point light, the
 /// edge slanted at 20° to the cells) take the refined pattern and no others: the shadow
-/// rays at the cells' corners find the edge however little of a cell it clips.
+/// rays at the cells' corners find the edge however little of a cell it clips. Also on
+/// grids cut into several tiles of rows and of columns (`direct::TILE_CELLS`).
 #[test]
 fn cells_a_shadow_edge_crosses_are_refined_and_no_others() {
     use luxtally::trace::direct::EDGE_REFINEMENT;
-    let (sides, base) = cell_sides(&shadow_scene());
-    let a = SHADOW_ANGLE_DEG.to_radians();
-    let w = 2.0 / 16.0;
-    let mut refined = 0;
-    for (k, &side) in sides.iter().enumerate() {
-        let (x0, y0) = (-1.0 + (k % 16) as f64 * w, -1.0 + (k / 16) as f64 * w);
-        // Signed distance of each corner past the edge (lit where positive).
-        let past: Vec<f64> = [(0.0, 0.0), (w, 0.0), (0.0, w), (w, w)]
-            .iter()
-            .map(|(dx, dy)| a.cos() * (x0 + dx) + a.sin() * (y0 + dy) - SHADOW_C)
-            .collect();
-        let lo = past.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = past.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        if lo > 1e-6 || hi < -1e-6 {
-            assert_eq!(
-                side, base,
-                "cell {k} lies wholly on one side of the shadow edge"
-            );
-        } else if lo < -1e-6 && hi > 1e-6 {
-            assert_eq!(
-                side,
-                EDGE_REFINEMENT * base,
-                "the shadow edge crosses cell {k}"
-            );
+    for [nu, nv] in [[16, 16], [40, 500], [20_000, 2]] {
+        let toml = shadow_scene().replace("cells = [16, 16]", &format!("cells = [{nu}, {nv}]"));
+        let (sides, base) = cell_sides(&toml);
+        assert_eq!(sides.len(), nu * nv);
+        let a = SHADOW_ANGLE_DEG.to_radians();
+        let (wx, wy) = (2.0 / nu as f64, 2.0 / nv as f64);
+        let mut refined = 0;
+        for (k, &side) in sides.iter().enumerate() {
+            let (x0, y0) = (-1.0 + (k % nu) as f64 * wx, -1.0 + (k / nu) as f64 * wy);
+            // Signed distance of each corner past the edge (lit where positive).
+            let past: Vec<f64> = [(0.0, 0.0), (wx, 0.0), (0.0, wy), (wx, wy)]
+                .iter()
+                .map(|(dx, dy)| a.cos() * (x0 + dx) + a.sin() * (y0 + dy) - SHADOW_C)
+                .collect();
+            let lo = past.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = past.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            if lo > 1e-6 || hi < -1e-6 {
+                assert_eq!(
+                    side, base,
+                    "{nu} × {nv}: cell {k} lies on one side of the edge"
+                );
+            } else if lo < -1e-6 && hi > 1e-6 {
+                assert_eq!(
+                    side,
+                    EDGE_REFINEMENT * base,
+                    "{nu} × {nv}: the edge crosses cell {k}"
+                );
+            }
+            refined += (side != base) as usize;
         }
-        refined += (side != base) as usize;
+        assert!(
+            refined >= nu.min(nv),
+            "{nu} × {nv}: {refined} cells refined"
+        );
     }
-    assert!(refined >= 16, "{refined} cells refined");
 }

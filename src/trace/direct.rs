@@ -55,6 +55,12 @@ const EDGE_PROBES_PER_SIDE: u32 = 8;
 /// (scenes/luminaires.toml) refining for every light's edge doubled the direct rays.
 const EDGE_MIN_SHARE: f64 = 0.1;
 
+/// Cells per tile of [`DirectLight::cell_sides`]: tiles run in parallel, each casting
+/// the shadow rays of its own corners (shared by its cells; a tile's border is cast
+/// again by its neighbour) and holding their light, one byte per light and corner, only
+/// while it runs.
+const TILE_CELLS: u32 = 16_384;
+
 /// What one light gives a corner of a receiver's cells, ordered so that the most light
 /// wins where a light reaches a corner along several paths.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -209,33 +215,38 @@ pub struct DirectLight<'a> {
 impl DirectLight<'_> {
     /// Points per side of each cell of `grid` in a replicate: [`points_per_side`], times
     /// [`EDGE_REFINEMENT`] where [`crosses_light_edge`]. The lights and the geometry
-    /// alone decide it, so a run computes it once (in parallel over bands of rows).
+    /// alone decide it, so a run computes it once (in parallel over tiles of cells).
     pub fn cell_sides(&self, grid: &ReceiverGrid) -> Vec<u32> {
         let m = points_per_side(grid.cell_count());
         let [nu, nv] = grid.cells;
-        let row = nu as usize + 1;
-        // Bands of rows run in parallel; each casts the shadow rays of its own corners
-        // (shared by its cells) and holds their light only while it runs.
-        let band_rows = (nv / 64).max(1);
-        let bands: Vec<Vec<u32>> = (0..nv.div_ceil(band_rows))
-            .into_par_iter()
-            .map_init(Scratch::default, |s, band| {
-                let rows = band * band_rows..((band + 1) * band_rows).min(nv);
-                let corners = self.corner_lights(grid, rows.clone(), s);
-                let cells = rows.clone().flat_map(|j| (0..nu).map(move |i| (i, j)));
+        let tile_cols = nu.min(TILE_CELLS);
+        let tile_rows = (TILE_CELLS / tile_cols).clamp(1, nv);
+        let tiles: Vec<(u32, u32)> = (0..nv)
+            .step_by(tile_rows as usize)
+            .flat_map(|j0| (0..nu).step_by(tile_cols as usize).map(move |i0| (i0, j0)))
+            .collect();
+        let tile_sides: Vec<Vec<u32>> = tiles
+            .par_iter()
+            .map_init(Scratch::default, |s, &(i0, j0)| {
+                let cols = i0..(i0 + tile_cols).min(nu);
+                let rows = j0..(j0 + tile_rows).min(nv);
+                let corners = self.corner_lights(grid, cols.clone(), rows.clone(), s);
+                let width = cols.len() + 1;
+                let per_light = width * (rows.len() + 1);
+                let cells = rows.clone().flat_map(|j| cols.clone().map(move |i| (i, j)));
                 cells
                     .map(|(i, j)| {
                         let cell_point = |a: f64, b: f64| {
                             grid.point_at((i as f64 + a) / nu as f64, (j as f64 + b) / nv as f64)
                         };
-                        let first = (j - rows.start) as usize * row + i as usize;
+                        let first = (j - j0) as usize * width + (i - i0) as usize;
                         let shadow_edge = |light: usize| {
-                            let of = |c: usize| corners[light][c];
+                            let of = |c: usize| corners[light * per_light + c];
                             let four = [
                                 of(first),
                                 of(first + 1),
-                                of(first + row),
-                                of(first + row + 1),
+                                of(first + width),
+                                of(first + width + 1),
                             ];
                             four.contains(&CornerLight::Lit)
                                 && four.contains(&CornerLight::Shadowed)
@@ -249,51 +260,62 @@ impl DirectLight<'_> {
                     .collect()
             })
             .collect();
-        bands.concat()
+        // The tiles' cells back in the grid's row-major order.
+        let mut sides = vec![0; grid.cell_count()];
+        for (&(i0, j0), tile) in tiles.iter().zip(tile_sides) {
+            let width = tile_cols.min(nu - i0) as usize;
+            for (k, side) in tile.into_iter().enumerate() {
+                sides[(j0 as usize + k / width) * nu as usize + i0 as usize + k % width] = side;
+            }
+        }
+        sides
     }
 
-    /// Per light, what reaches each corner of the cells of rows `rows` of the grid
-    /// ((nu + 1) × (rows + 1) corners, row by row) from the source's centre, through the
-    /// backend's occlusion path. A straight shadow edge crossing a cell leaves at least
-    /// one of its corners on each side, so a lit and a shadowed corner find every such
-    /// cell (one shadow ray per corner and light, shared by the cells around it).
+    /// What reaches each corner of the cells of columns `cols` and rows `rows` of the
+    /// grid from each light's centre, through the backend's occlusion path: light by
+    /// light, (cols + 1) × (rows + 1) corners row by row. A straight shadow edge crossing
+    /// a cell leaves at least one of its corners on each side, so a lit and a shadowed
+    /// corner find every such cell (one shadow ray per corner and light, shared by the
+    /// cells around it).
     fn corner_lights(
         &self,
         grid: &ReceiverGrid,
+        cols: std::ops::Range<u32>,
         rows: std::ops::Range<u32>,
         s: &mut Scratch,
-    ) -> Vec<Vec<CornerLight>> {
+    ) -> Vec<CornerLight> {
         const BATCH: usize = 4096;
-        let row = grid.cells[0] as usize + 1;
+        let width = cols.len() + 1;
+        let per_light = width * (rows.len() + 1);
         let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
-        let corners = row * (rows.len() + 1);
         let corner_point = |c: usize| {
-            let j = rows.start as usize + c / row;
-            grid.point_at((c % row) as f64 / nu, j as f64 / nv)
+            let (i, j) = (
+                cols.start as usize + c % width,
+                rows.start as usize + c / width,
+            );
+            grid.point_at(i as f64 / nu, j as f64 / nv)
         };
-        (0..self.emitters.emitters.len())
-            .map(|light| {
-                let mut states = vec![CornerLight::Unlit; corners];
-                for first in (0..corners).step_by(BATCH) {
-                    s.rays.clear();
-                    s.weights.clear();
-                    for c in first..(first + BATCH).min(corners) {
-                        self.queue(grid, light, corner_point(c), (0.5, 0.5), 1.0, c as u32, s);
-                    }
-                    self.caster.occluded(&s.rays, &mut s.occluded);
-                    for (&(c, w), &blocked) in s.weights.iter().zip(&s.occluded) {
-                        let state = match (w > 0.0, blocked) {
-                            (false, _) => CornerLight::Unlit,
-                            (true, true) => CornerLight::Shadowed,
-                            (true, false) => CornerLight::Lit,
-                        };
-                        let corner = &mut states[c as usize];
-                        *corner = (*corner).max(state);
-                    }
+        let mut states = vec![CornerLight::Unlit; per_light * self.emitters.emitters.len()];
+        for (light, states) in states.chunks_mut(per_light).enumerate() {
+            for first in (0..per_light).step_by(BATCH) {
+                s.rays.clear();
+                s.weights.clear();
+                for c in first..(first + BATCH).min(per_light) {
+                    self.queue(grid, light, corner_point(c), (0.5, 0.5), 1.0, c as u32, s);
                 }
-                states
-            })
-            .collect()
+                self.caster.occluded(&s.rays, &mut s.occluded);
+                for (&(c, w), &blocked) in s.weights.iter().zip(&s.occluded) {
+                    let state = match (w > 0.0, blocked) {
+                        (false, _) => CornerLight::Unlit,
+                        (true, true) => CornerLight::Shadowed,
+                        (true, false) => CornerLight::Lit,
+                    };
+                    let corner = &mut states[c as usize];
+                    *corner = (*corner).max(state);
+                }
+            }
+        }
+        states
     }
 
     /// Adds replicates `first .. first + count` to every cell of `grid` (`cells` are the
