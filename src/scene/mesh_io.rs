@@ -136,6 +136,10 @@ fn check_vertex(p: DVec3) -> std::result::Result<DVec3, String> {
 /// they lie within their buffer; `None` sends the caller to `gltf`'s reader, which
 /// handles every layout and reports data outside the buffer.
 fn packed_bytes<'b>(accessor: &gltf::Accessor, buffers: &'b [Cow<[u8]>]) -> Option<&'b [u8]> {
+    // A sparse accessor's values are substituted by the reader (refused earlier anyway).
+    if accessor.sparse().is_some() {
+        return None;
+    }
     let view = accessor.view()?;
     if view
         .stride()
@@ -532,6 +536,7 @@ impl GltfWalk<'_> {
                 &[DataType::U8, DataType::U16, DataType::U32],
             )?;
         }
+        let material = self.material(primitive)?;
         let base = self.out.prototypes[proto].0.vertices.len();
         let mesh = &mut self.out.prototypes[proto].0;
         let buffers = &self.buffers;
@@ -592,12 +597,10 @@ impl GltfWalk<'_> {
                         .find(|&i| i as usize >= vertex_count);
                     return Err(out_of_range(bad.unwrap_or_default()));
                 }
-                let base = u32::try_from(base)
-                    .ok()
-                    .filter(|b| {
-                        vertex_count == 0 || b.checked_add(vertex_count as u32 - 1).is_some()
-                    })
-                    .ok_or("too many vertices")?;
+                // Every index is below vertex_count, so the last vertex bounds them all.
+                let base = u32::try_from(base + vertex_count.saturating_sub(1))
+                    .map(|_| base as u32)
+                    .map_err(|_| "too many vertices")?;
                 mesh.triangles.par_extend(
                     bytes
                         .par_chunks_exact(12)
@@ -627,7 +630,6 @@ impl GltfWalk<'_> {
             }
         }
         let added = mesh.triangles.len() - triangles_before;
-        let material = self.material(primitive)?;
         let materials = &mut self.out.prototypes[proto].1;
         materials.resize(materials.len() + added, material);
         Ok(())

@@ -333,7 +333,11 @@ impl<'a> Tracer<'a> {
             .map(|m| Surfacing::new(Bsdf::new(m)))
             .collect();
         let any_connects = receivers.iter().any(|r| r.estimator.connects());
-        let lambert_track = !any_connects && surfacings.iter().all(|s| s.lambert_only);
+        // The slim loop keeps no segment lane: every bounced photon stays `Emitted`, which
+        // only receivers whose direct light is not sampled score by crossing.
+        let any_samples_direct = receivers.iter().any(|r| r.estimator.direct_by_replicates());
+        let lambert_track =
+            !any_connects && !any_samples_direct && surfacings.iter().all(|s| s.lambert_only);
         let max_albedo = scene
             .materials
             .iter()
@@ -409,6 +413,9 @@ impl<'a> Tracer<'a> {
             [&mut rays.ox, &mut rays.oy, &mut rays.oz],
             [&mut rays.dx, &mut rays.dy, &mut rays.dz],
         );
+        // An emitter that forgot to write a photon's stream back would leave every photon
+        // on the placeholder's one stream: plausible results, all correlated.
+        debug_assert!(lanes.rng.iter().all(|r| *r != Pcg32::new(0, 0)));
         // The parity of a photon's index is that of its chunk offset, flipped when the
         // chunk starts at an odd index.
         let odd_first = first % 2 == 1;
