@@ -553,16 +553,22 @@ fn obvhs_row(
 
 /// A scene for photon benchmarks over `geometry`: one grey Lambertian material
 /// (ρ = 0.5) on every triangle and a point light at the centre of the bounds' top tenth.
+/// Where [`lit_scene`] puts its light over a scene of bounds `lo`, `hi`: above the
+/// middle, a tenth of the height under the top.
+fn light_above(lo: DVec3, hi: DVec3) -> DVec3 {
+    DVec3::new(
+        (lo.x + hi.x) / 2.0,
+        (lo.y + hi.y) / 2.0,
+        hi.z - 0.1 * (hi.z - lo.z),
+    )
+}
+
 pub fn lit_scene(name: &str, mut geometry: Geometry) -> crate::scene::Scene {
     use crate::light::Point;
     use crate::scene::{Light, Material, Scene};
     geometry.material = crate::scene::TriangleIds::constant(0, geometry.triangle_count());
     let (lo, hi) = geometry.world_bounds().unwrap_or((DVec3::ZERO, DVec3::ONE));
-    let position = DVec3::new(
-        (lo.x + hi.x) / 2.0,
-        (lo.y + hi.y) / 2.0,
-        hi.z - 0.1 * (hi.z - lo.z),
-    );
+    let position = light_above(lo, hi);
     Scene {
         name: name.to_string(),
         materials: vec![Material::lambertian("grey", 0.5)],
@@ -966,19 +972,18 @@ struct ProceduralGlb {
 impl ProceduralGlb {
     fn write(min_triangles: usize) -> Result<ProceduralGlb> {
         let (vertices, triangles) = procedural_mesh(min_triangles);
-        let path =
-            std::env::temp_dir().join(format!("luxtally-bench-scale-{}.glb", std::process::id()));
-        write_glb(&path, &vertices, &triangles)?;
         let (lo, hi) = vertices.iter().fold(
             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
             |(lo, hi), v| (lo.min(*v), hi.max(*v)),
         );
-        let light = DVec3::new(
-            (lo.x + hi.x) / 2.0,
-            (lo.y + hi.y) / 2.0,
-            hi.z - 0.1 * (hi.z - lo.z),
-        );
-        Ok(ProceduralGlb { path, light })
+        // The guard first: a failed write leaves no file behind either.
+        let file = ProceduralGlb {
+            path: std::env::temp_dir()
+                .join(format!("luxtally-bench-scale-{}.glb", std::process::id())),
+            light: light_above(lo, hi),
+        };
+        write_glb(&file.path, &vertices, &triangles)?;
+        Ok(file)
     }
 
     /// The file through the scene loader, lit as [`lit_scene`] lights the generated one.
@@ -1017,6 +1022,10 @@ pub fn write_glb(path: &Path, vertices: &[DVec3], triangles: &[[u32; 3]]) -> Res
             bin.extend_from_slice(&c.to_le_bytes());
         }
     }
+    if lo.cmpgt(hi).any() {
+        // No finite vertex: bounds that are numbers all the same.
+        (lo, hi) = (Vec3::ZERO, Vec3::ZERO);
+    }
     let positions_len = bin.len();
     for i in triangles.iter().flatten() {
         bin.extend_from_slice(&i.to_le_bytes());
@@ -1037,11 +1046,10 @@ pub fn write_glb(path: &Path, vertices: &[DVec3], triangles: &[[u32; 3]]) -> Res
     // Chunks are 4-byte aligned: JSON padded with spaces (the binary chunk already is).
     let mut json = json.into_bytes();
     json.resize(json.len().next_multiple_of(4), b' ');
-    let length = 12 + 8 + json.len() + 8 + bin.len();
+    let length = u32::try_from(12 + 8 + json.len() + 8 + bin.len())
+        .map_err(|_| Error::Unsupported(format!("{}: over 4 GiB", path.display())))?;
     let fail = |e| Error::io(path, e);
     let mut out = std::io::BufWriter::new(std::fs::File::create(path).map_err(fail)?);
-    let length = u32::try_from(length)
-        .map_err(|_| Error::Unsupported(format!("{}: over 4 GiB", path.display())))?;
     out.write_all(b"glTF").map_err(fail)?;
     out.write_all(&2u32.to_le_bytes()).map_err(fail)?;
     out.write_all(&length.to_le_bytes()).map_err(fail)?;
@@ -1076,11 +1084,12 @@ pub fn bench_scale_case(
     let (rss_before_mib, _) = memory_mib();
     let cpu_before_s = process_cpu_seconds();
     let start = Instant::now();
-    let scene = match (case, &glb) {
-        (ScaleCase::Instanced(n), _) => instanced_scene(mesh, n)?,
-        (ScaleCase::Flattened(n), _) => lit_scene("flattened", procedural_geometry(n as usize)),
-        (ScaleCase::Glb(_), Some(file)) => file.scene()?,
-        (ScaleCase::Glb(_), None) => unreachable!("written above"),
+    let scene = match (&glb, case) {
+        (Some(file), _) => file.scene()?,
+        (None, ScaleCase::Instanced(n)) => instanced_scene(mesh, n)?,
+        (None, ScaleCase::Flattened(n) | ScaleCase::Glb(n)) => {
+            lit_scene("flattened", procedural_geometry(n as usize))
+        }
     };
     let load_s = start.elapsed().as_secs_f64();
     let load_cpu_s = process_cpu_seconds() - cpu_before_s;
