@@ -431,7 +431,7 @@ fn gltf_chunks(bytes: &[u8]) -> std::result::Result<GltfChunks<'_>, String> {
 
 /// gltf-json 1.4.1's validation indexes `accessors[POSITION]` before checking that the
 /// index exists, and panics on a bad one: check that first on the unvalidated JSON.
-fn precheck_gltf(json: &[u8]) -> std::result::Result<(), String> {
+fn precheck_gltf(json: &[u8]) -> std::result::Result<gltf::json::Root, String> {
     let root: gltf::json::Root =
         gltf::json::deserialize::from_slice(json).map_err(|e| format!("malformed glTF: {e}"))?;
     for (m, mesh) in root.meshes.iter().enumerate() {
@@ -446,13 +446,13 @@ fn precheck_gltf(json: &[u8]) -> std::result::Result<(), String> {
             }
         }
     }
-    Ok(())
+    Ok(root)
 }
 
 fn load_gltf(bytes: &[u8], path: &Path) -> std::result::Result<MeshParts, String> {
     let (json, blob) = gltf_chunks(bytes)?;
-    precheck_gltf(&json)?;
-    let gltf = gltf::Gltf::from_slice(&json).map_err(|e| format!("malformed glTF: {e}"))?;
+    let gltf = gltf::Document::from_json(precheck_gltf(&json)?)
+        .map_err(|e| format!("malformed glTF: {e}"))?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let buffers = gltf
         .buffers()
@@ -468,7 +468,7 @@ fn load_gltf(bytes: &[u8], path: &Path) -> std::result::Result<MeshParts, String
         mesh_slot: vec![None; gltf.meshes().len()],
         material_slot: vec![None; gltf.materials().len()],
         stack: Vec::new(),
-        doc: &gltf.document,
+        doc: &gltf,
     };
     for node in scene.nodes() {
         walk.node(&node, DMat4::IDENTITY)?;
