@@ -80,6 +80,28 @@ pub trait Light: Debug + Send + Sync + Any {
     }
 }
 
+/// Emission lanes photon by photon: photon k's origin and direction come from
+/// `sample(k, stream)`, drawing from `streams.get(k)`, which is left in `rngs[k]`; they
+/// are written as f32 lanes `o` and `d`.
+#[inline]
+pub fn emission_lanes_one_by_one(
+    streams: PhotonStreams,
+    rngs: &mut [Pcg32],
+    o: [&mut [f32]; 3],
+    d: [&mut [f32]; 3],
+    mut sample: impl FnMut(usize, &mut Pcg32) -> (DVec3, DVec3),
+) {
+    let ([ox, oy, oz], [dx, dy, dz]) = (o, d);
+    for (k, slot) in rngs.iter_mut().enumerate() {
+        let mut rng = streams.get(k);
+        let (p, w) = sample(k, &mut rng);
+        *slot = rng;
+        let (p, w) = (p.as_vec3(), w.as_vec3());
+        (ox[k], oy[k], oz[k]) = (p.x, p.y, p.z);
+        (dx[k], dy[k], dz[k]) = (w.x, w.y, w.z);
+    }
+}
+
 /// A light source prepared for sampling, in the scene's local frame.
 pub trait Emitter: Debug + Send + Sync {
     /// The origin and unit direction of one photon, drawn from the source's emission
@@ -99,15 +121,7 @@ pub trait Emitter: Debug + Send + Sync {
         o: [&mut [f32]; 3],
         d: [&mut [f32]; 3],
     ) {
-        let ([ox, oy, oz], [dx, dy, dz]) = (o, d);
-        for (k, slot) in rngs.iter_mut().enumerate() {
-            let mut rng = streams.get(k);
-            let (p, w) = self.sample_emission(&mut rng);
-            *slot = rng;
-            let (p, w) = (p.as_vec3(), w.as_vec3());
-            (ox[k], oy[k], oz[k]) = (p.x, p.y, p.z);
-            (dx[k], dy[k], dz[k]) = (w.x, w.y, w.z);
-        }
+        emission_lanes_one_by_one(streams, rngs, o, d, |_, rng| self.sample_emission(rng));
     }
 
     /// The light arriving at local point `p` (method.md eqs. 1–2), piece by piece: one

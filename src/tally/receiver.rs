@@ -128,6 +128,13 @@ impl ReceiverGrid {
     pub fn point_at(&self, a: f64, b: f64) -> DVec3 {
         self.corner + self.u * a + self.v * b
     }
+
+    /// The local-frame point (a, b) ∈ [0, 1]² of cell (i, j) (a corner of it at (0, 0)).
+    #[inline]
+    pub fn cell_point(&self, (i, j): (u32, u32), a: f64, b: f64) -> DVec3 {
+        let (nu, nv) = (self.cells[0] as f64, self.cells[1] as f64);
+        self.point_at((i as f64 + a) / nu, (j as f64 + b) / nv)
+    }
 }
 
 #[cfg(test)]

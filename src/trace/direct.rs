@@ -236,9 +236,7 @@ impl DirectLight<'_> {
                 let cells = rows.clone().flat_map(|j| cols.clone().map(move |i| (i, j)));
                 cells
                     .map(|(i, j)| {
-                        let cell_point = |a: f64, b: f64| {
-                            grid.point_at((i as f64 + a) / nu as f64, (j as f64 + b) / nv as f64)
-                        };
+                        let cell_point = |a, b| grid.cell_point((i, j), a, b);
                         let first = (j - j0) as usize * width + (i - i0) as usize;
                         let shadow_edge = |light: usize| {
                             let of = |c: usize| corners[light * per_light + c];
@@ -287,13 +285,12 @@ impl DirectLight<'_> {
         const BATCH: usize = 4096;
         let width = cols.len() + 1;
         let per_light = width * (rows.len() + 1);
-        let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
         let corner_point = |c: usize| {
             let (i, j) = (
-                cols.start as usize + c % width,
-                rows.start as usize + c / width,
+                cols.start + (c % width) as u32,
+                rows.start + (c / width) as u32,
             );
-            grid.point_at(i as f64 / nu, j as f64 / nv)
+            grid.cell_point((i, j), 0.0, 0.0)
         };
         let mut states = vec![CornerLight::Unlit; per_light * self.emitters.emitters.len()];
         for (light, states) in states.chunks_mut(per_light).enumerate() {
@@ -359,8 +356,7 @@ impl DirectLight<'_> {
         sums: &mut CellSums,
     ) -> u64 {
         let (i, j) = (k % grid.cells[0], k / grid.cells[0]);
-        let (nu, nv) = (grid.cells[0] as f64, grid.cells[1] as f64);
-        let cell_point = |a: f64, b: f64| grid.point_at((i as f64 + a) / nu, (j as f64 + b) / nv);
+        let cell_point = |a, b| grid.cell_point((i, j), a, b);
         let choice = LightChoice::for_cell(self.emitters, grid, cell_point(0.5, 0.5));
         let samples = m * m;
         let mut rays = 0;

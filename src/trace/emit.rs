@@ -84,15 +84,9 @@ impl Emitters {
         if let [emitter] = &self.emitters[..] {
             return emitter.sample_emission_lanes(streams, rngs, o, d);
         }
-        let ([ox, oy, oz], [dx, dy, dz]) = (o, d);
-        for (k, slot) in rngs.iter_mut().enumerate() {
-            let mut rng = streams.get(k);
-            let (p, w) = self.sample(self.light_of(streams.first + k as u64), &mut rng);
-            *slot = rng;
-            let (p, w) = (p.as_vec3(), w.as_vec3());
-            (ox[k], oy[k], oz[k]) = (p.x, p.y, p.z);
-            (dx[k], dy[k], dz[k]) = (w.x, w.y, w.z);
-        }
+        crate::light::emission_lanes_one_by_one(streams, rngs, o, d, |k, rng| {
+            self.sample(self.light_of(streams.first + k as u64), rng)
+        });
     }
 
     /// Samples the origin and unit direction of a photon of light `light`.
