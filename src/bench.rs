@@ -553,22 +553,16 @@ fn obvhs_row(
 
 /// A scene for photon benchmarks over `geometry`: one grey Lambertian material
 /// (ρ = 0.5) on every triangle and a point light at the centre of the bounds' top tenth.
-/// Where [`lit_scene`] puts its light over a scene of bounds `lo`, `hi`: above the
-/// middle, a tenth of the height under the top.
-fn light_above(lo: DVec3, hi: DVec3) -> DVec3 {
-    DVec3::new(
-        (lo.x + hi.x) / 2.0,
-        (lo.y + hi.y) / 2.0,
-        hi.z - 0.1 * (hi.z - lo.z),
-    )
-}
-
 pub fn lit_scene(name: &str, mut geometry: Geometry) -> crate::scene::Scene {
     use crate::light::Point;
     use crate::scene::{Light, Material, Scene};
     geometry.material = crate::scene::TriangleIds::constant(0, geometry.triangle_count());
     let (lo, hi) = geometry.world_bounds().unwrap_or((DVec3::ZERO, DVec3::ONE));
-    let position = light_above(lo, hi);
+    let position = DVec3::new(
+        (lo.x + hi.x) / 2.0,
+        (lo.y + hi.y) / 2.0,
+        hi.z - 0.1 * (hi.z - lo.z),
+    );
     Scene {
         name: name.to_string(),
         materials: vec![Material::lambertian("grey", 0.5)],
@@ -963,41 +957,29 @@ intensity_cd = 1000
 }
 
 /// The procedural scene written as a binary glTF file in the temporary directory
-/// (removed on drop), and the point light [`lit_scene`] would give it.
+/// (removed on drop).
 struct ProceduralGlb {
     path: std::path::PathBuf,
-    light: DVec3,
 }
 
 impl ProceduralGlb {
     fn write(min_triangles: usize) -> Result<ProceduralGlb> {
         let (vertices, triangles) = procedural_mesh(min_triangles);
-        let (lo, hi) = vertices.iter().fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), v| (lo.min(*v), hi.max(*v)),
-        );
         // The guard first: a failed write leaves no file behind either.
         let file = ProceduralGlb {
             path: std::env::temp_dir()
                 .join(format!("luxtally-bench-scale-{}.glb", std::process::id())),
-            light: light_above(lo, hi),
         };
         write_glb(&file.path, &vertices, &triangles)?;
         Ok(file)
     }
 
-    /// The file through the scene loader, lit as [`lit_scene`] lights the generated one.
+    /// The file through the scene loader, lit as [`lit_scene`] lights the generated scene.
     fn scene(&self) -> Result<crate::scene::Scene> {
-        let text = format!(
-            "name = \"glb\"\n[materials.grey]\nreflectance = 0.5\n\
-             [[objects]]\nfile = \"{}\"\nmaterial = \"grey\"\n\
-             [[lights]]\ntype = \"point\"\nposition = [{}, {}, {}]\nintensity_cd = 1000\n",
-            self.path.display().to_string().replace('\\', "/"),
-            self.light.x,
-            self.light.y,
-            self.light.z
-        );
-        crate::scene::load_str(&text, Path::new("."), "bench-scale.toml")
+        Ok(lit_scene(
+            "glb",
+            load_obj_geometry(&self.path, DVec3::ZERO)?,
+        ))
     }
 }
 

@@ -888,7 +888,7 @@ mod tests {
         };
         let bytes = c.encode().unwrap();
         assert_eq!(Checkpoint::decode(&bytes, "c").unwrap(), c);
-        // Format 2 as every release wrote it: a change here needs FORMAT_VERSION bumped.
+        // Format 2's encoding of this checkpoint: a change here needs FORMAT_VERSION bumped.
         assert_eq!(
             (bytes.len(), crc32fast::hash(&bytes)),
             (GOLDEN_LEN, GOLDEN_CRC),

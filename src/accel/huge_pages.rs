@@ -17,7 +17,7 @@
 //! 0.29 → 0.36 Mrays/s on one thread).
 //!
 //! The module's `unsafe` (two `prctl`s, `madvise`, `mmap`) is the one exception to
-//! "`unsafe` only in the Embree wrapper": it is about Embree's memory, not its API.
+//! "`unsafe` only in the Embree wrapper": it is about the BVHs' memory, not Embree's API.
 
 use std::sync::{Mutex, OnceLock};
 use std::thread::JoinHandle;
@@ -97,7 +97,7 @@ impl Drop for Deferred {
 /// ([`wait_for_collapse`]) where the process has huge pages on and the kernel can
 /// collapse; elsewhere nothing changes.
 pub fn advise(ranges: &[(usize, usize)]) {
-    const HUGE: usize = 2 << 20;
+    use sys::HUGE_PAGE as HUGE;
     if !(sys::huge_pages_enabled() && can_collapse()) {
         return;
     }
@@ -197,6 +197,8 @@ pub fn huge_page_regions(smaps: &str) -> Vec<(usize, usize)> {
 #[cfg(target_os = "linux")]
 mod sys {
     const NONE: libc::c_ulong = 0;
+    /// A transparent huge page (x86-64's PMD size).
+    pub const HUGE_PAGE: usize = 2 << 20;
 
     /// Whether the process may use transparent huge pages (not `PR_SET_THP_DISABLE`d).
     pub fn huge_pages_enabled() -> bool {
@@ -230,8 +232,7 @@ mod sys {
 
     /// Collapses one touched page of a scratch mapping: whether the kernel can.
     pub fn collapse_works() -> bool {
-        const HUGE: usize = 2 << 20;
-        let len = 2 * HUGE;
+        let len = 2 * HUGE_PAGE;
         // SAFETY: a private anonymous mapping of our own, written and unmapped here only.
         unsafe {
             let map = libc::mmap(
@@ -245,9 +246,9 @@ mod sys {
             if map == libc::MAP_FAILED {
                 return false;
             }
-            let aligned = (map as usize).next_multiple_of(HUGE);
+            let aligned = (map as usize).next_multiple_of(HUGE_PAGE);
             (aligned as *mut u8).write(1);
-            let works = collapse(aligned, HUGE);
+            let works = collapse(aligned, HUGE_PAGE);
             libc::munmap(map, len);
             works
         }
@@ -256,6 +257,7 @@ mod sys {
 
 #[cfg(not(target_os = "linux"))]
 mod sys {
+    pub const HUGE_PAGE: usize = 2 << 20;
     pub fn huge_pages_enabled() -> bool {
         false
     }

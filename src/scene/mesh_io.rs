@@ -161,10 +161,16 @@ fn packed_bytes<'b>(accessor: &gltf::Accessor, buffers: &'b [Cow<[u8]>]) -> Opti
 /// `find_first` does, took longer than reading the file).
 const BLOCK: usize = 1 << 16;
 
+/// The little-endian u32 at byte `k` of `c`.
+#[inline]
+fn u32_at(c: &[u8], k: usize) -> u32 {
+    u32::from_le_bytes([c[k], c[k + 1], c[k + 2], c[k + 3]])
+}
+
 /// The little-endian f32 at byte `k` of `c`.
 #[inline]
 fn f32_at(c: &[u8], k: usize) -> f32 {
-    f32::from_le_bytes([c[k], c[k + 1], c[k + 2], c[k + 3]])
+    f32::from_bits(u32_at(c, k))
 }
 
 fn whole_triangles(indices: usize) -> std::result::Result<(), String> {
@@ -585,7 +591,7 @@ impl GltfWalk<'_> {
         match (primitive.indices(), packed_indices) {
             (Some(_), Some(bytes)) => {
                 whole_triangles(bytes.len() / 4)?;
-                let index = |c: &[u8]| u32::from_le_bytes([c[0], c[1], c[2], c[3]]);
+                let index = |c: &[u8]| u32_at(c, 0);
                 let in_range = |b: &[u8]| {
                     b.chunks_exact(4)
                         .all(|c| (index(c) as usize) < vertex_count)
@@ -604,7 +610,7 @@ impl GltfWalk<'_> {
                 mesh.triangles.par_extend(
                     bytes
                         .par_chunks_exact(12)
-                        .map(|c| [0, 4, 8].map(|k| base + index(&c[k..]))),
+                        .map(|c| [0, 4, 8].map(|k| base + u32_at(c, k))),
                 );
             }
             (Some(acc), None) => {
