@@ -21,7 +21,7 @@ use crate::run::{ChunkRecord, Engine, Resumed, RunOptions, RunResult, RunState, 
 use crate::scene::Scene;
 use crate::stats::forecast::HistoryPoint;
 use crate::stats::stop::{StopReason, Target};
-use crate::tally::{CellSums, ChunkTally, CompensatedSum, Tallies};
+use crate::tally::{CellSums, ChunkTally, Moments, Tallies};
 use crate::trace::direct::{DirectSchedule, PILOT_REPLICATES};
 use crate::trace::CHUNK_PHOTONS;
 use crate::{Error, Result};
@@ -39,7 +39,7 @@ const MAGIC: &[u8; 8] = b"LUXCKPT1";
 /// seed (photon streams, the direct light's sampling): older files are refused, so a run
 /// never continues or merges another version's numbers. 2: photon streams seeded by
 /// `rng::PhotonStreams`, shadow edges refine the direct light's cells.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 const HEADER_BYTES: usize = 8 + 4 + 8 + 4;
 /// Seconds between checkpoints unless `--checkpoint-every` says otherwise.
 pub const DEFAULT_PERIOD_S: f64 = 60.0;
@@ -118,7 +118,7 @@ impl SavedPoint {
     }
 }
 
-/// [`Tallies`] as saved: every compensated sum as (sum, compensation). The triangle
+/// [`Tallies`] as saved: the cells packed by [`pack_cells`]. The triangle
 /// maps are borrowed from the run where the save is awaited (the last one), copied where
 /// another thread writes it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -133,6 +133,7 @@ struct SavedTallies<'a> {
     direct_replicates: u64,
     direct_rays: u64,
     dark: bool,
+    score_unit: f64,
 }
 
 impl<'a> SavedTallies<'a> {
@@ -153,6 +154,7 @@ impl<'a> SavedTallies<'a> {
             direct_replicates: t.direct_replicates,
             direct_rays: t.direct_rays,
             dark: t.dark,
+            score_unit: t.score_unit,
         }
     }
 
@@ -167,27 +169,28 @@ impl<'a> SavedTallies<'a> {
             direct_replicates: self.direct_replicates,
             direct_rays: self.direct_rays,
             dark: self.dark,
+            score_unit: self.score_unit,
         })
     }
 }
 
-/// Cells as bytes, fast to write and small where cells are empty: per cell the hits
-/// (LEB128), a u16 mask of which of the 16 words (moments' sum and compensation × 4,
-/// then the direct sums') are not +0.0, and those words' bits (LE).
+/// Cells as bytes, fast to write and small where cells are empty: per cell the hits,
+/// the scoring histories and the two moment counts (LEB128), a u16 mask of which of the
+/// 10 words (mean, M₂, M₃, M₄, max of the photons, then of the direct light) are not
+/// +0.0, and those words' bits (LE).
 fn pack_cells(cells: &[CellSums]) -> Vec<u8> {
     let mut out = Vec::with_capacity(cells.len() * 4);
     for c in cells {
-        let mut h = c.hits;
-        while h >= 0x80 {
-            out.push((h as u8) | 0x80);
-            h >>= 7;
+        for mut h in [c.hits, c.scoring_histories, c.photons.n, c.direct.n] {
+            while h >= 0x80 {
+                out.push((h as u8) | 0x80);
+                h >>= 7;
+            }
+            out.push(h as u8);
         }
-        out.push(h as u8);
-        let mut words = [0u64; 16];
-        for (k, s) in c.moments.iter().chain(&c.direct).enumerate() {
-            let (a, b) = s.parts();
-            (words[2 * k], words[2 * k + 1]) = (a.to_bits(), b.to_bits());
-        }
+        let words = [&c.photons, &c.direct]
+            .map(|m| [m.mean, m.m2, m.m3, m.m4, m.max].map(f64::to_bits))
+            .concat();
         let mask = words
             .iter()
             .enumerate()
@@ -205,41 +208,47 @@ fn unpack_cells(bytes: &[u8]) -> Option<Vec<CellSums>> {
     let mut cells = Vec::new();
     let mut at = 0;
     while at < bytes.len() {
-        let (mut hits, mut shift) = (0u64, 0);
-        loop {
-            let b = *bytes.get(at)?;
-            at += 1;
-            hits |= ((b & 0x7f) as u64).checked_shl(shift)?;
-            if b < 0x80 {
-                break;
+        let mut counts = [0u64; 4];
+        for count in &mut counts {
+            let mut shift = 0;
+            loop {
+                let b = *bytes.get(at)?;
+                at += 1;
+                *count |= ((b & 0x7f) as u64).checked_shl(shift)?;
+                if b < 0x80 {
+                    break;
+                }
+                shift += 7;
             }
-            shift += 7;
         }
         let mask = u16::from_le_bytes(bytes.get(at..at + 2)?.try_into().ok()?);
         at += 2;
-        let mut words = [0u64; 16];
+        let mut words = [0f64; 10];
         for (k, w) in words.iter_mut().enumerate() {
             if mask & (1 << k) != 0 {
-                *w = u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?);
+                *w = f64::from_bits(u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?));
                 at += 8;
             }
         }
-        let s = |k: usize| {
-            CompensatedSum::from_parts(
-                f64::from_bits(words[2 * k]),
-                f64::from_bits(words[2 * k + 1]),
-            )
+        let moments = |n: u64, w: &[f64]| Moments {
+            n,
+            mean: w[0],
+            m2: w[1],
+            m3: w[2],
+            m4: w[3],
+            max: w[4],
         };
+        let [hits, scoring_histories, n_photons, n_direct] = counts;
         cells.push(CellSums {
-            moments: [s(0), s(1), s(2), s(3)],
+            photons: moments(n_photons, &words[..5]),
             hits,
-            direct: [s(4), s(5), s(6), s(7)],
+            scoring_histories,
+            direct: moments(n_direct, &words[5..]),
         });
     }
     Some(cells)
 }
 
-/// Bytes that postcard writes in one piece (a `Vec<u8>` would go byte by byte).
 #[derive(Clone, Debug, PartialEq)]
 struct Bytes(Vec<u8>);
 
@@ -858,13 +867,13 @@ fn check_shards(
 mod tests {
     use super::*;
 
-    /// Length and CRC-32 of the fixed checkpoint below, encoded by format 2.
-    const GOLDEN_LEN: usize = 124;
-    const GOLDEN_CRC: u32 = 2_018_349_533;
+    /// Length and CRC-32 of the fixed checkpoint below, encoded by format 3.
+    const GOLDEN_LEN: usize = 141;
+    const GOLDEN_CRC: u32 = 1_149_461_879;
 
     #[test]
     fn a_damaged_checkpoint_is_refused_in_one_line() {
-        let t = Tallies::new(2, 3);
+        let t = Tallies::new(2, 3, 1.0);
         let c = Checkpoint {
             scene_path: "s.toml".into(),
             scene_fingerprint: 7,
@@ -888,7 +897,7 @@ mod tests {
         };
         let bytes = c.encode().unwrap();
         assert_eq!(Checkpoint::decode(&bytes, "c").unwrap(), c);
-        // Format 2's encoding of this checkpoint: a change here needs FORMAT_VERSION bumped.
+        // Format 3's encoding of this checkpoint: a change here needs FORMAT_VERSION bumped.
         assert_eq!(
             (bytes.len(), crc32fast::hash(&bytes)),
             (GOLDEN_LEN, GOLDEN_CRC),

@@ -39,6 +39,11 @@ pub struct StopCriteria {
     /// Stop once every cell of the target received this many hits.
     #[arg(long, value_name = "N")]
     pub min_hits: Option<u64>,
+    /// Stop as soon as the error target is found unreachable: nothing has reached it, or
+    /// the forecast needs more photons or time than the run may take.
+    #[serde(default)]
+    #[arg(long)]
+    pub stop_if_unreachable: bool,
 }
 
 impl StopCriteria {
@@ -52,6 +57,7 @@ impl StopCriteria {
             target: over.target.clone().or_else(|| self.target.clone()),
             absolute: over.absolute || self.absolute,
             min_hits: over.min_hits.or(self.min_hits),
+            stop_if_unreachable: over.stop_if_unreachable || self.stop_if_unreachable,
         }
     }
 

@@ -794,6 +794,13 @@ fn print_run(args: &RunArgs, s: &summary::Summary, out: &Path) {
                     100.0 * r.rel_error.arithmetic,
                     100.0 * r.rel_error.quadratic
                 )
+            } else if r.unknown_cells == r.dark_cells {
+                format!(
+                    "error {:.2} % (arithmetic) {:.2} % (quadratic) over the {} lit cells",
+                    100.0 * r.rel_error_known_cells.arithmetic,
+                    100.0 * r.rel_error_known_cells.quadratic,
+                    r.values.len() - r.dark_cells
+                )
             } else {
                 format!(
                     "error unknown: {} of {} cells without a score ({:.2} % over the others)",
@@ -802,7 +809,23 @@ fn print_run(args: &RunArgs, s: &summary::Summary, out: &Path) {
                     100.0 * r.rel_error_known_cells.quadratic
                 )
             };
-            println!("  receiver {name}: mean {:.4} {}, {error}", r.mean, r.unit);
+            let mut flags = String::new();
+            if r.unreliable_cells > 0 {
+                flags += &format!("; {} unreliable cells", r.unreliable_cells);
+            }
+            if r.dark_cells > 0 {
+                flags += &format!(
+                    "; {} dark cells (at most {:.4} {})",
+                    r.dark_cells, r.dark_upper_bound, r.unit
+                );
+            }
+            println!(
+                "  receiver {name}: mean {:.4} {}, {error}{flags}",
+                r.mean, r.unit
+            );
+        }
+        if let Some(why) = &s.target_unreachable {
+            println!("  target unreachable: {why}");
         }
         println!(
             "  global: {} triangles, mean {:.4} lx, error {:.2} %",
@@ -875,8 +898,18 @@ fn progress_line(state: &RunState<'_>) -> String {
         (None, Some(r)) => format!(", done in ~{r:.1} s"),
         (None, None) => String::new(),
     };
+    let unreachable = luxtally::run::target_unreachable(
+        state.scene,
+        state.options,
+        state.target,
+        state.tallies,
+        state.history,
+        state.forecast,
+    )
+    .map(|why| format!(", target unreachable: {why}"))
+    .unwrap_or_default();
     format!(
-        "{:.1} s  {}: {:.3}{unit}{goal}{eta}  {} photons  {:.1} Mrays/s",
+        "{:.1} s  {}: {:.3}{unit}{goal}{eta}{unreachable}  {} photons  {:.1} Mrays/s",
         state.elapsed_s,
         state.target.describe(&state.scene.receivers),
         error * scale,

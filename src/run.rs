@@ -6,7 +6,7 @@ use crate::criteria::{self, StopCriteria};
 use crate::distributed::Distributor;
 use crate::scene::{Estimator, Scene};
 use crate::stats::forecast::{forecast, Forecast, HistoryPoint};
-use crate::stats::stop::{min_hits, receiver_target_error, StopReason, Target};
+use crate::stats::stop::{min_hits, receiver_target_error, unreachable, StopReason, Target};
 use crate::stats::{map_stats, MapKind};
 use crate::tally::{ChunkTally, Tallies};
 use crate::trace::direct::{relative_variances, DirectSchedule, PILOT_REPLICATES};
@@ -257,9 +257,21 @@ impl<'s> Engine<'s> {
         caster: &'s dyn RayCaster,
     ) -> Result<Engine<'s>> {
         let threads = options.threads.max(1);
+        let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
+        let flux = tracer.emitters.total_flux_lm;
+        if !flux.is_finite() {
+            return Err(Error::input(
+                "lights",
+                format!(
+                    "their total flux, {flux} lm, is beyond f64's range ({:e}): scale the \
+                     lights down (results scale with them)",
+                    f64::MAX
+                ),
+            ));
+        }
         Ok(Engine {
             pool: thread_pool(threads)?,
-            tracer: Tracer::new(scene, caster, options.seed, options.estimator),
+            tracer,
             threads,
             direct_sides: std::sync::OnceLock::new(),
         })
@@ -531,7 +543,21 @@ impl<'r, 's> Epochs<'r, 's> {
             )),
             _ => None,
         };
-        let reason = self.stop_reason(error, elapsed_s, interrupt);
+        let unreachable = stop.stop_if_unreachable
+            && target_unreachable(
+                scene,
+                self.options,
+                &self.target,
+                &self.tallies,
+                &self.history,
+                self.forecast,
+            )
+            .is_some();
+        let reason = if unreachable {
+            Some(StopReason::Unreachable)
+        } else {
+            self.stop_reason(error, elapsed_s, interrupt)
+        };
         self.stats_s += stats_start.elapsed().as_secs_f64();
         reason
     }
@@ -698,6 +724,37 @@ fn next_schedule_point(done: u64) -> u64 {
         }
     }
     point
+}
+
+/// Why the run's error target cannot be met, if it cannot ([`unreachable`]): nothing has
+/// scored in the target's cells, or the forecast is beyond the photon or time budget.
+pub fn target_unreachable(
+    scene: &Scene,
+    options: &RunOptions,
+    target: &Target,
+    tallies: &Tallies,
+    history: &[HistoryPoint],
+    forecast: Option<Forecast>,
+) -> Option<String> {
+    let nothing_scored = !tallies.dark
+        && target.receiver().is_some_and(|r| {
+            let cells = tallies.receiver_cells(&scene.receivers, r);
+            match target {
+                Target::Block { .. } => target
+                    .cells(&scene.receivers)
+                    .iter()
+                    .all(|&k| cells[k].hits == 0),
+                _ => cells.iter().all(|c| c.hits == 0),
+            }
+        });
+    unreachable(
+        options.stop.target_error,
+        history,
+        forecast,
+        nothing_scored,
+        options.stop.max_photons(),
+        options.stop.time_limit_s,
+    )
 }
 
 /// The target's error now: the global map's odd/even error, or the receiver's.

@@ -139,7 +139,10 @@ fn receiver_csv_parses_back_to_summary_numbers_and_cell_centres() {
             let mut lines = text.lines();
             assert_eq!(
                 lines.next(),
-                Some("i,j,x_m,y_m,z_m,value,sigma,rel_error,hits")
+                Some(
+                    "i,j,x_m,y_m,z_m,value,sigma,rel_error,hits,scoring_histories,vov,dof,\
+                     status,upper_bound"
+                )
             );
             let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
             assert_eq!(rows.len(), rs.values.len());
@@ -161,6 +164,10 @@ fn receiver_csv_parses_back_to_summary_numbers_and_cell_centres() {
                 assert!(same(f(6), rs.sigma[k]), "{} vs {}", row[6], rs.sigma[k]);
                 assert!(same(f(7), relative_error(rs.values[k], rs.sigma[k])));
                 assert_eq!(row[8].parse::<u64>().unwrap(), rs.hits[k]);
+                assert_eq!(row[9].parse::<u64>().unwrap(), rs.scoring_histories[k]);
+                assert!(same(f(10), rs.vov[k]) && same(f(11), rs.dof[k]));
+                assert_eq!(row[12], rs.status[k].as_str());
+                assert!(same(f(13), rs.upper_bound[k]));
             }
         }
     });

@@ -13,7 +13,7 @@ use super::summary::Summary;
 use crate::raster::encode_rgb_png;
 use crate::raster::font::{advance, draw_text};
 use crate::raster::palette::{normalise, viridis};
-use crate::stats::relative_error;
+use crate::stats::{relative_error, CellStatus};
 use crate::{Error, Result};
 
 /// A receiver's per-cell data as summary.json holds it (index j * cells[0] + i).
@@ -25,6 +25,8 @@ pub struct ReceiverData {
     pub values: Vec<f64>,
     pub sigma: Vec<f64>,
     pub hits: Vec<u64>,
+    /// Cells whose σ is not to be trusted (`unreliable`): hatched in both images.
+    pub unreliable: Vec<bool>,
 }
 
 impl ReceiverData {
@@ -47,6 +49,9 @@ impl ReceiverData {
                 values: r.values.clone(),
                 sigma: r.sigma.clone(),
                 hits: r.hits.clone(),
+                unreliable: (0..n)
+                    .map(|k| super::receiver_files::status_of(r, k) == CellStatus::Unreliable)
+                    .collect(),
             });
         }
         Ok(out)
@@ -71,7 +76,8 @@ pub fn receiver_pngs(r: &ReceiverData) -> Result<(Vec<u8>, Vec<u8>)> {
         .filter(|v| v.is_finite())
         .fold(0.0, f64::max);
     let value_px = |k: usize| viridis(normalise(r.values[k], max_value));
-    let value = false_colour(r.cells, &value_px, max_value, 1.0, &r.unit)?;
+    let hatched = |k: usize| r.unreliable.get(k).copied().unwrap_or(false);
+    let value = false_colour(r.cells, &value_px, &hatched, max_value, 1.0, &r.unit)?;
 
     let errors = r.rel_error();
     let max_error = errors
@@ -88,7 +94,7 @@ pub fn receiver_pngs(r: &ReceiverData) -> Result<(Vec<u8>, Vec<u8>)> {
             [160, 160, 160]
         }
     };
-    let error = false_colour(r.cells, &error_px, max_error, 100.0, "%")?;
+    let error = false_colour(r.cells, &error_px, &hatched, max_error, 100.0, "%")?;
     Ok((value, error))
 }
 
@@ -99,11 +105,16 @@ const TICKS: usize = 5;
 /// From the bar's edge to its labels, past the 3 px tick marks.
 const LABEL_GAP: usize = 10;
 
+/// Hatching of an unreliable cell: every third pixel diagonal, white.
+const HATCH: [u8; 3] = [255, 255, 255];
+
 /// An RGB canvas: the image scaled up to ≥ 256 px wide, a colour bar 0 … `scale` and
-/// its labels (`scale · label_factor`, then `unit`).
+/// its labels (`scale · label_factor`, then `unit`); `hatched` cells are crossed by
+/// diagonal stripes.
 fn false_colour(
     cells: [usize; 2],
     colour: &dyn Fn(usize) -> [u8; 3],
+    hatched: &dyn Fn(usize) -> bool,
     scale: f64,
     label_factor: f64,
     unit: &str,
@@ -134,8 +145,13 @@ fn false_colour(
     for py in 0..img_h {
         let j = h - 1 - py / s;
         for px in 0..img_w {
-            let i = px / s;
-            c.set(MARGIN + px, top + py, colour(j * w + i));
+            let k = j * w + px / s;
+            let stripe = hatched(k) && (px + py) % 3 == 0;
+            c.set(
+                MARGIN + px,
+                top + py,
+                if stripe { HATCH } else { colour(k) },
+            );
         }
     }
     for y in 0..bar_h {

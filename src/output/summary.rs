@@ -8,8 +8,8 @@ use crate::stats::forecast::HistoryPoint;
 use crate::stats::null_as_nan;
 use crate::stats::stop::Target;
 use crate::stats::{
-    cell_estimate, cell_vov, figure_of_merit, map_stats, mean_illuminance_sigma_lx,
-    mean_illuminance_vov, receiver_stats, reliability, Averaged, MapKind, Reliability,
+    cell_vov, direct_estimate, figure_of_merit, map_stats, mean_illuminance_sigma_lx,
+    mean_illuminance_vov, receiver_stats, reliability, Averaged, CellStatus, MapKind, Reliability,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -68,6 +68,10 @@ pub struct Summary {
     pub reliability: Reliability,
     pub history: Vec<HistoryPoint>,
     pub forecast: Option<ForecastSummary>,
+    /// Why the error target cannot be met, if it cannot: nothing has reached its cells,
+    /// or the forecast is beyond the photon or time budget (`--stop-if-unreachable` ends
+    /// the run then); null while it may be met, and without a target.
+    pub target_unreachable: Option<String>,
 }
 
 #[derive(Serialize, Deserialize, Default)]
@@ -138,6 +142,25 @@ pub struct ReceiverSummary {
     /// above 0.1 the σ of that cell is not yet reliable).
     #[serde(deserialize_with = "null_as_nan::f64")]
     pub max_vov: f64,
+    /// Per cell: the photon histories that scored in it, its VOV, the effective degrees
+    /// of freedom of its σ (Welch–Satterthwaite) and its status: `reliable`,
+    /// `unreliable` (too few or too uneven samples behind σ), `dark` (nothing scored
+    /// while other cells did: see `upper_bound`) or `unknown` (nothing scored anywhere).
+    pub scoring_histories: Vec<u64>,
+    #[serde(deserialize_with = "null_as_nan::vec")]
+    pub vov: Vec<f64>,
+    #[serde(deserialize_with = "null_as_nan::vec")]
+    pub dof: Vec<f64>,
+    pub status: Vec<CellStatus>,
+    /// A dark cell's 95 % upper bound on its value (null for the other cells).
+    #[serde(deserialize_with = "null_as_nan::vec")]
+    pub upper_bound: Vec<f64>,
+    pub unreliable_cells: usize,
+    /// Dark cells (counted in `unknown_cells` too: their σ is unknown) and the largest
+    /// of their upper bounds (0 without dark cells).
+    pub dark_cells: usize,
+    #[serde(deserialize_with = "null_as_nan::f64")]
+    pub dark_upper_bound: f64,
 }
 
 #[derive(Serialize, Deserialize, Default)]
@@ -226,6 +249,14 @@ pub fn build(state: &RunState<'_>) -> Summary {
         global: global(state),
         reliability: reliability(state.history, target_vov(state)),
         history: state.history.to_vec(),
+        target_unreachable: crate::run::target_unreachable(
+            scene,
+            state.options,
+            state.target,
+            t,
+            state.history,
+            state.forecast,
+        ),
         forecast: match (state.options.stop.target_error, state.forecast) {
             (Some(target_error), Some(f)) => Some(ForecastSummary {
                 target_error,
@@ -245,19 +276,13 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
     let stats = receiver_stats(cells, r.cells, t.counts(), None);
     let direct: Vec<(f64, f64)> = cells
         .iter()
-        .map(|c| {
-            let (sum, sum_sq) = c.direct_sums();
-            if t.direct_replicates == 0 {
-                (0.0, 0.0)
-            } else {
-                cell_estimate(sum, sum_sq, t.direct_replicates)
-            }
-        })
+        .map(|c| direct_estimate(c, t.counts()))
         .collect();
     let max_vov = cells
         .iter()
-        .filter(|c| c.hits > 0)
-        .map(|c| cell_vov(c, t.counts()))
+        .zip(&stats.vov)
+        .filter(|(c, _)| c.hits > 0)
+        .map(|(_, &vov)| vov)
         .fold(0.0, f64::max);
     let (quantity, unit) = match r.quantity {
         Quantity::Illuminance => ("illuminance", "lx"),
@@ -281,6 +306,14 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
         unknown_cells: stats.unknown_cells,
         fom: figure_of_merit(stats.rel_error.quadratic, state.elapsed_s),
         max_vov,
+        scoring_histories: stats.scoring_histories,
+        vov: stats.vov,
+        dof: stats.dof,
+        status: stats.status,
+        upper_bound: stats.upper_bound,
+        unreliable_cells: stats.unreliable_cells,
+        dark_cells: stats.dark_cells,
+        dark_upper_bound: stats.dark_bound,
     }
 }
 

@@ -35,17 +35,18 @@ pub fn cell_estimate(sum: f64, sum_sq: f64, n: u64) -> (f64, f64) {
 /// light at all). Receivers report [`receiver_stats`]'s σ instead, which also looks at
 /// the cell's neighbours where few photons scored.
 pub fn cell_value(c: &CellSums, counts: Counts) -> (f64, f64) {
-    let p = photon_part(c, counts.photons);
-    let (direct_value, direct_var) = direct_part(c, counts.direct_replicates);
+    let p = photon_part(c, counts);
+    let (direct_value, direct_var) = direct_part(c, counts);
     if c.hits == 0 {
         return (0.0, if counts.dark { 0.0 } else { f64::NAN });
     }
     (p.value + direct_value, (p.var + direct_var).sqrt())
 }
 
-/// The photons' part of a cell: value Σx/N, its own variance estimate (eq. 7 squared)
-/// and the standard deviation of that variance estimate, sqrt(Σx⁴)/N² (the scores'
-/// squares are the terms of Σx², nearly all histories scoring 0 or once).
+/// The photons' part of a cell, in the receiver's unit: value Σx/N, its own variance
+/// estimate (eq. 7 squared) and the standard deviation of that variance estimate,
+/// sqrt(M₄)/N² (M₄ the fourth central moment sum; nearly all histories score 0 or once,
+/// so the terms of M₂ are the scores' squares).
 #[derive(Clone, Copy, Debug, Default)]
 struct PhotonPart {
     value: f64,
@@ -53,30 +54,46 @@ struct PhotonPart {
     var_sd: f64,
 }
 
-fn photon_part(c: &CellSums, photons: u64) -> PhotonPart {
-    let (value, sigma) = cell_estimate(c.sum(), c.sum_sq(), photons);
-    if !(sigma >= 0.0) {
+fn photon_part(c: &CellSums, counts: Counts) -> PhotonPart {
+    let m = c.photons.over(counts.photons);
+    let (value, var) = m.mean_and_variance();
+    let unit = counts.unit;
+    if !(var >= 0.0) {
         return PhotonPart {
-            value,
+            value: value * unit,
             ..PhotonPart::default()
         };
     }
-    let n = photons as f64;
+    let n = counts.photons as f64;
     PhotonPart {
-        value,
-        var: sigma * sigma,
-        var_sd: c.moments[3].value().max(0.0).sqrt() / (n * n),
+        value: value * unit,
+        var: var * unit * unit,
+        var_sd: m.m4.max(0.0).sqrt() / (n * n) * unit * unit,
     }
 }
 
-/// The direct light's part of a cell: value and variance over its replicates.
-fn direct_part(c: &CellSums, replicates: u64) -> (f64, f64) {
-    if replicates == 0 {
+/// The direct light's part of a cell: value and variance over its replicates, in the
+/// receiver's unit.
+fn direct_part(c: &CellSums, counts: Counts) -> (f64, f64) {
+    if counts.direct_replicates == 0 {
         return (0.0, 0.0);
     }
-    let (sum, sum_sq) = c.direct_sums();
-    let (value, sigma) = cell_estimate(sum, sum_sq, replicates);
-    (value, if sigma >= 0.0 { sigma * sigma } else { 0.0 })
+    let (value, var) = c.direct.over(counts.direct_replicates).mean_and_variance();
+    let unit = counts.unit;
+    (
+        value * unit,
+        if var >= 0.0 { var * unit * unit } else { 0.0 },
+    )
+}
+
+/// The sampled direct part of a cell and its σ, in the receiver's unit ((0, 0) for a
+/// receiver without sampled direct light; σ NaN below 2 replicates).
+pub fn direct_estimate(c: &CellSums, counts: Counts) -> (f64, f64) {
+    if counts.direct_replicates == 0 {
+        return (0.0, 0.0);
+    }
+    let (value, var) = c.direct.over(counts.direct_replicates).mean_and_variance();
+    (value * counts.unit, var.sqrt() * counts.unit)
 }
 
 /// The photons' variance of a cell that sees its own error where few photons scored.
@@ -160,19 +177,18 @@ fn neighbour_median(var: &[f64], nu: usize, nv: usize, i: usize, j: usize) -> f6
 
 /// VOV of a cell's value (photon part plus direct part): the parts are independent, so
 /// the variance of its variance estimate is the sum of theirs,
-/// VOV = (VOV_p·σ_p⁴ + VOV_d·σ_d⁴)/(σ_p² + σ_d²)²; 1 when nothing is known.
+/// VOV = (VOV_p·σ_p⁴ + VOV_d·σ_d⁴)/(σ_p² + σ_d²)²; 1 when nothing is known. Invariant
+/// to the light's level (the moments are central and in the score unit).
 pub fn cell_vov(c: &CellSums, counts: Counts) -> f64 {
-    let (photons, replicates) = (counts.photons, counts.direct_replicates);
-    let part = |moments: [f64; 4], n: u64| {
-        let (_, sigma) = cell_estimate(moments[0], moments[1], n);
-        if moments[1] > 0.0 && sigma > 0.0 {
-            (variance_of_variance(moments, n), sigma * sigma)
-        } else {
-            (0.0, 0.0)
+    let part = |m: crate::tally::Moments, n: u64| {
+        let m = m.over(n);
+        match m.mean_and_variance() {
+            (_, var) if var > 0.0 => (m.vov(), var),
+            _ => (0.0, 0.0),
         }
     };
-    let (vov_p, var_p) = part(c.moments.map(|m| m.value()), photons);
-    let (vov_d, var_d) = part(c.direct.map(|m| m.value()), replicates);
+    let (vov_p, var_p) = part(c.photons, counts.photons);
+    let (vov_d, var_d) = part(c.direct, counts.direct_replicates);
     let var = var_p + var_d;
     if var > 0.0 {
         (vov_p * var_p * var_p + vov_d * var_d * var_d) / (var * var)
@@ -240,13 +256,14 @@ pub struct Averaged {
 /// Receiver (or block) summary per eq. 9: the arithmetic mean value and the RMS σ over
 /// the mean by arithmetic and quadratic averaging of the values.
 pub fn mean_error(values: &[f64], sigmas: &[f64]) -> (f64, Averaged) {
-    let (mean, rel, _) = mean_error_of(values.iter().copied().zip(sigmas.iter().copied()));
+    let (mean, rel, _, _) = mean_error_of(values.iter().copied().zip(sigmas.iter().copied()));
     (mean, rel)
 }
 
-/// [`mean_error`] over (value, σ) pairs, with the RMS σ: one pass, no arrays (a receiver
-/// of 10⁶ cells is summarised after every epoch). Each sum is taken in the pairs' order.
-fn mean_error_of(pairs: impl Iterator<Item = (f64, f64)>) -> (f64, Averaged, f64) {
+/// [`mean_error`] over (value, σ) pairs, with the RMS σ and the quadratic mean: one pass,
+/// no arrays (a receiver of 10⁶ cells is summarised after every epoch). Each sum is
+/// taken in the pairs' order.
+fn mean_error_of(pairs: impl Iterator<Item = (f64, f64)>) -> (f64, Averaged, f64, f64) {
     let (mut k, mut sum, mut sum_sq, mut sigma_sq) = (0usize, -0.0f64, -0.0f64, -0.0f64);
     for (v, sigma) in pairs {
         k += 1;
@@ -259,7 +276,7 @@ fn mean_error_of(pairs: impl Iterator<Item = (f64, f64)>) -> (f64, Averaged, f64
             arithmetic: f64::NAN,
             quadratic: f64::NAN,
         };
-        return (0.0, unknown, 0.0);
+        return (0.0, unknown, 0.0, 0.0);
     }
     let k = k as f64;
     let mean = sum / k;
@@ -269,7 +286,86 @@ fn mean_error_of(pairs: impl Iterator<Item = (f64, f64)>) -> (f64, Averaged, f64
         arithmetic: relative_error(mean, rms_sigma),
         quadratic: relative_error(quadratic_mean, rms_sigma),
     };
-    (mean, rel, rms_sigma)
+    (mean, rel, rms_sigma, quadratic_mean)
+}
+
+/// Fewest effective samples (Welch–Satterthwaite degrees of freedom, [`cell_dof`])
+/// behind a reliable cell's σ: at 30, Student's t puts 1.0 × 10⁻⁴ beyond 4.5σ (the
+/// normal 6.8 × 10⁻⁶), and a cell's own variance estimate is good to about ±25 %.
+pub const MIN_RELIABLE_DOF: f64 = 30.0;
+
+/// Largest VOV of a reliable cell (MCNP's rule for a tally bin).
+pub const MAX_RELIABLE_VOV: f64 = 0.1;
+
+/// How far a cell's value and σ can be trusted (`status` of summary.json's receivers).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CellStatus {
+    /// Scored, with at least [`MIN_RELIABLE_DOF`] effective samples and a VOV of at most
+    /// [`MAX_RELIABLE_VOV`] behind its σ.
+    #[default]
+    Reliable,
+    /// Scored, but by too few (or too uneven) samples for its σ to be trusted.
+    Unreliable,
+    /// Nothing scored in it while other cells of its receiver scored: value 0, with an
+    /// upper bound (`upper_bound`) instead of a σ.
+    Dark,
+    /// Nothing scored, and nothing to bound it by: no cell of the receiver has scored.
+    Unknown,
+}
+
+impl CellStatus {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            CellStatus::Reliable => "reliable",
+            CellStatus::Unreliable => "unreliable",
+            CellStatus::Dark => "dark",
+            CellStatus::Unknown => "unknown",
+        }
+    }
+}
+
+/// Effective degrees of freedom of a cell's variance estimate, by Welch–Satterthwaite
+/// over its two independent parts: the photons' (variance `var_p` from about n_p − 1
+/// degrees of freedom, n_p the effective number of scoring histories (Σx)²/Σx²) and the
+/// direct light's (`var_d`, n_d the effective replicates). A cell whose σ rests on a
+/// handful of scores has few, whatever its σ says; infinite for a cell whose variance is
+/// 0 (an exactly known value).
+pub fn cell_dof(c: &CellSums, counts: Counts, var_p: f64, var_d: f64) -> f64 {
+    let term = |var: f64, n: f64| {
+        if var > 0.0 {
+            if n > 1.0 {
+                var * var / (n - 1.0)
+            } else {
+                f64::INFINITY
+            }
+        } else {
+            0.0
+        }
+    };
+    let n_p = c.photons.over(counts.photons).effective_count();
+    let n_d = c.direct.over(counts.direct_replicates).effective_count();
+    let denominator = term(var_p, n_p) + term(var_d, n_d);
+    let var = var_p + var_d;
+    if denominator > 0.0 {
+        var * var / denominator
+    } else if var > 0.0 {
+        0.0
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// Upper bound (95 %, in the receiver's unit) on the value of a cell nothing reached in
+/// `counts`' histories and replicates, from the largest score any cell of its receiver
+/// drew, `max_score` and `max_replicate` (score unit): no score in N histories bounds
+/// the chance that a history scores there by 3/N (Poisson, zero events), so its value by
+/// 3/N times the largest score a history leaves in a cell of the receiver; the same for
+/// the direct light's replicates. It assumes the dark cell could draw no larger a score
+/// than the receiver's cells did.
+pub fn dark_upper_bound(counts: Counts, max_score: f64, max_replicate: f64) -> f64 {
+    let part = |n: u64, max: f64| if n > 0 { 3.0 / n as f64 * max } else { 0.0 };
+    (part(counts.photons, max_score) + part(counts.direct_replicates, max_replicate)) * counts.unit
 }
 
 /// Values, errors and hits of one receiver.
@@ -279,16 +375,32 @@ pub struct ReceiverStats {
     /// NaN where the cell's error is unknown (nothing scored there).
     pub sigma: Vec<f64>,
     pub hits: Vec<u64>,
+    /// Histories that scored in each cell.
+    pub scoring_histories: Vec<u64>,
+    /// Each cell's VOV ([`cell_vov`]; 1 where nothing is known).
+    pub vov: Vec<f64>,
+    /// Each cell's effective degrees of freedom ([`cell_dof`]; 0 where nothing scored).
+    pub dof: Vec<f64>,
+    pub status: Vec<CellStatus>,
+    /// Upper bound of each dark cell's value (NaN for the others).
+    pub upper_bound: Vec<f64>,
     pub mean: f64,
     /// Eq. 9 over all cells: NaN while some cell's error is unknown.
     pub rel_error: Averaged,
     /// Eq. 9 over the cells whose error is known.
     pub rel_error_known: Averaged,
-    /// Cells whose error is unknown.
+    /// Cells whose error is unknown: dark and unknown cells.
     pub unknown_cells: usize,
+    pub unreliable_cells: usize,
+    pub dark_cells: usize,
+    /// Largest upper bound of a dark cell (0 without dark cells).
+    pub dark_bound: f64,
     /// RMS σ over the cells (eq. 9's numerator), in the receiver's unit; NaN while some
     /// cell's error is unknown.
     pub rms_sigma: f64,
+    /// RMS σ and quadratic mean value over the cells whose error is known.
+    pub rms_sigma_known: f64,
+    pub quadratic_mean_known: f64,
 }
 
 /// Per-cell values and σ of a receiver's cells `cells`, a grid of `shape` = [nu, nv]
@@ -296,6 +408,16 @@ pub struct ReceiverStats {
 /// from [`pooled_variance`] over the cell's neighbours. Cells where nothing scored keep
 /// an unknown σ.
 pub fn cell_values(cells: &[CellSums], shape: [u32; 2], counts: Counts) -> (Vec<f64>, Vec<f64>) {
+    let (values, sigmas, _) = cell_values_and_parts(cells, shape, counts);
+    (values, sigmas)
+}
+
+/// [`cell_values`], with each cell's photon and direct variances as reported.
+fn cell_values_and_parts(
+    cells: &[CellSums],
+    shape: [u32; 2],
+    counts: Counts,
+) -> (Vec<f64>, Vec<f64>, Vec<(f64, f64)>) {
     use rayon::prelude::*;
     // Cells are independent, each computed the same way on any thread (same bits); a
     // 10⁶-cell receiver took ≈ 100 ms per epoch on one thread. Run inside the run's pool.
@@ -305,54 +427,106 @@ pub fn cell_values(cells: &[CellSums], shape: [u32; 2], counts: Counts) -> (Vec<
     let parts: Vec<PhotonPart> = cells
         .par_iter()
         .with_min_len(MIN_CELLS_PER_TASK)
-        .map(|c| photon_part(c, counts.photons))
+        .map(|c| photon_part(c, counts))
         .collect();
     let own: Vec<f64> = parts.iter().map(|p| p.var).collect();
-    cells
+    let per_cell: Vec<(f64, f64, (f64, f64))> = cells
         .par_iter()
         .zip(&parts)
         .enumerate()
         .with_min_len(MIN_CELLS_PER_TASK)
         .map(|(k, (c, p))| {
             if c.hits == 0 {
-                return (0.0, if counts.dark { 0.0 } else { f64::NAN });
+                return (0.0, if counts.dark { 0.0 } else { f64::NAN }, (0.0, 0.0));
             }
             let pooled = neighbour_median(&own, nu, nv, k % nu, k / nu);
-            let (direct_value, direct_var) = direct_part(c, counts.direct_replicates);
+            let (direct_value, direct_var) = direct_part(c, counts);
+            let photon_var = pooled_variance(p.var, p.var_sd, pooled);
             (
                 p.value + direct_value,
-                (pooled_variance(p.var, p.var_sd, pooled) + direct_var).sqrt(),
+                (photon_var + direct_var).sqrt(),
+                (photon_var, direct_var),
             )
         })
-        .unzip()
+        .collect();
+    let mut values = Vec::with_capacity(cells.len());
+    let mut sigmas = Vec::with_capacity(cells.len());
+    let mut vars = Vec::with_capacity(cells.len());
+    for (v, s, p) in per_cell {
+        values.push(v);
+        sigmas.push(s);
+        vars.push(p);
+    }
+    (values, sigmas, vars)
 }
 
 /// Per-cell statistics of a receiver's cells `cells` ([`cell_values`]), a grid of
 /// `shape` cells, summarised over the cells `picked` (local indices; `None`: all).
+/// Each cell's VOV, degrees of freedom and [`CellStatus`] too: eq. 9 is reported over
+/// all cells and over those whose error is known (not dark, not unknown).
 pub fn receiver_stats(
     cells: &[CellSums],
     shape: [u32; 2],
     counts: Counts,
     picked: Option<&[usize]>,
 ) -> ReceiverStats {
-    let (values, sigmas) = cell_values(cells, shape, counts);
+    let (values, sigmas, vars) = cell_values_and_parts(cells, shape, counts);
+    let indices: Vec<usize> = match picked {
+        None => (0..cells.len()).collect(),
+        Some(picked) => picked.to_vec(),
+    };
+    let (max_score, max_replicate) = cells.iter().fold((0.0f64, 0.0f64), |(a, b), c| {
+        (a.max(c.photons.max), b.max(c.direct.max))
+    });
+    let receiver_scored = cells.iter().any(|c| c.hits > 0);
+    let bound = dark_upper_bound(counts, max_score, max_replicate);
     let mut s = ReceiverStats::default();
-    match picked {
-        None => {
-            s.values = values;
-            s.sigma = sigmas;
-            s.hits = cells.iter().map(|c| c.hits).collect();
-        }
-        Some(picked) => {
-            s.values = picked.iter().map(|&k| values[k]).collect();
-            s.sigma = picked.iter().map(|&k| sigmas[k]).collect();
-            s.hits = picked.iter().map(|&k| cells[k].hits).collect();
-        }
+    for &k in &indices {
+        let c = &cells[k];
+        s.values.push(values[k]);
+        s.sigma.push(sigmas[k]);
+        s.hits.push(c.hits);
+        s.scoring_histories.push(c.scoring_histories);
+        let lit = c.hits > 0 || counts.dark;
+        let (vov, dof) = if lit {
+            (
+                cell_vov(c, counts),
+                cell_dof(c, counts, vars[k].0, vars[k].1),
+            )
+        } else {
+            (1.0, 0.0)
+        };
+        s.vov.push(vov);
+        s.dof.push(dof);
+        let status = if lit {
+            if dof >= MIN_RELIABLE_DOF && vov <= MAX_RELIABLE_VOV || counts.dark {
+                CellStatus::Reliable
+            } else {
+                CellStatus::Unreliable
+            }
+        } else if receiver_scored {
+            CellStatus::Dark
+        } else {
+            CellStatus::Unknown
+        };
+        s.status.push(status);
+        s.upper_bound.push(if status == CellStatus::Dark {
+            bound
+        } else {
+            f64::NAN
+        });
     }
     let pairs = || s.values.iter().copied().zip(s.sigma.iter().copied());
-    (s.mean, s.rel_error, s.rms_sigma) = mean_error_of(pairs());
-    s.rel_error_known = mean_error_of(pairs().filter(|(_, sigma)| !sigma.is_nan())).1;
+    (s.mean, s.rel_error, s.rms_sigma, _) = mean_error_of(pairs());
+    let known = mean_error_of(pairs().filter(|(_, sigma)| !sigma.is_nan()));
+    s.rel_error_known = known.1;
+    s.rms_sigma_known = known.2;
+    s.quadratic_mean_known = known.3;
     s.unknown_cells = s.sigma.iter().filter(|sigma| sigma.is_nan()).count();
+    let count = |status| s.status.iter().filter(|&&x| x == status).count();
+    s.unreliable_cells = count(CellStatus::Unreliable);
+    s.dark_cells = count(CellStatus::Dark);
+    s.dark_bound = if s.dark_cells > 0 { bound } else { 0.0 };
     s
 }
 
@@ -715,8 +889,8 @@ mod tests {
         let n = 1_000_000u64;
         let cell = |k: u32| {
             let mut c = CellSums::default();
-            for m in &mut c.moments {
-                m.add(k as f64);
+            for _ in 0..k {
+                c.photons.push(1.0);
             }
             c.hits = k as u64;
             c
@@ -727,6 +901,7 @@ mod tests {
             photons: n,
             direct_replicates: 0,
             dark: false,
+            unit: 1.0,
         };
         let (values, sigmas) = cell_values(&cells, [3, 3], counts);
         let own = cell_estimate(3.0, 3.0, n).1;
@@ -751,12 +926,7 @@ mod tests {
                 let mut c = CellSums::default();
                 if k % 7 != 0 {
                     for _ in 0..1 + k % 5 {
-                        let x = crate::sampling::uniform(&mut rng);
-                        let mut p = 1.0;
-                        for m in &mut c.moments {
-                            p *= x;
-                            m.add(p);
-                        }
+                        c.photons.push(crate::sampling::uniform(&mut rng));
                         c.hits += 1;
                     }
                 }
@@ -767,6 +937,7 @@ mod tests {
             photons: 1000,
             direct_replicates: 0,
             dark: false,
+            unit: 1.0,
         };
         let on = |threads| {
             let pool = crate::run::thread_pool(threads).unwrap();
@@ -779,6 +950,49 @@ mod tests {
                 .collect::<Vec<u64>>()
         };
         assert_eq!(bits(on(1)), bits(on(2)));
+    }
+
+    #[test]
+    fn cells_are_reliable_from_thirty_degrees_of_freedom_and_dark_cells_are_bounded() {
+        // k equal photon scores of 1 among 10⁶ histories: k − 1 degrees of freedom.
+        let counts = Counts {
+            photons: 1_000_000,
+            direct_replicates: 0,
+            dark: false,
+            unit: 2.0,
+        };
+        let cell = |k: u32| {
+            let mut c = CellSums::default();
+            for _ in 0..k {
+                c.photons.push(1.0);
+            }
+            c.hits = k as u64;
+            c.scoring_histories = k as u64;
+            c
+        };
+        let c = cell(20);
+        let (_, var) = c.photons.over(counts.photons).mean_and_variance();
+        let dof = cell_dof(&c, counts, var, 0.0);
+        assert!((dof - 19.0).abs() < 1e-6, "{dof}");
+        // A 4 × 4 receiver: 14 cells of 40 scores, one of 20, one of none.
+        let mut cells = vec![cell(40); 16];
+        cells[5] = cell(20);
+        cells[10] = CellSums::default();
+        let s = receiver_stats(&cells, [4, 4], counts, None);
+        assert_eq!(s.status[0], CellStatus::Reliable);
+        assert_eq!(s.status[5], CellStatus::Unreliable);
+        assert_eq!(s.status[10], CellStatus::Dark);
+        assert_eq!(
+            (s.unreliable_cells, s.dark_cells, s.unknown_cells),
+            (1, 1, 1)
+        );
+        // No score in 10⁶ histories, the largest score 1 (in units of 2): 6·10⁻⁶.
+        assert!((s.upper_bound[10] - 6e-6).abs() < 1e-18 && s.dark_bound == s.upper_bound[10]);
+        assert!(s.upper_bound[0].is_nan() && s.sigma[10].is_nan());
+        assert_eq!(s.scoring_histories[0], 40);
+        // Nothing scored anywhere: unknown, not dark.
+        let s = receiver_stats(&[CellSums::default(); 4], [2, 2], counts, None);
+        assert!(s.status.iter().all(|&x| x == CellStatus::Unknown) && s.dark_cells == 0);
     }
 
     #[test]

@@ -1,7 +1,8 @@
 //! Stop criteria (method.md §5, contract `--target`): they read statistics only, once
 //! per epoch; the first one met ends the run.
 
-use super::{receiver_stats, relative_error};
+use super::forecast::{Forecast, HistoryPoint};
+use super::{receiver_stats, relative_error, CellStatus};
 use crate::scene::Receiver;
 use crate::tally::{CellSums, Counts};
 use crate::{Error, Result};
@@ -124,8 +125,12 @@ impl Target {
 
 /// The target's current error for a receiver target: relative (eq. 9 quadratic for a
 /// whole receiver, the worst cell's σ_rel for a block) or absolute (RMS σ, or the worst
-/// cell's σ, in the receiver's unit). Infinite while the error of a cell it covers is
-/// unknown (nothing scored there): such a target is never converged.
+/// cell's σ, in the receiver's unit), over the cells that carry light. Dark cells
+/// ([`CellStatus::Dark`]) count by their upper bound: the error is at least the largest
+/// dark bound (relative to the quadratic mean of the lit cells), so a target is met only
+/// once nothing the dark cells may hold could change the answer by more than it.
+/// Infinite while a cell it covers is unknown (nothing scored on the whole receiver) or
+/// unreliable (too few samples behind its σ): such a target is never converged.
 pub fn receiver_target_error(
     target: &Target,
     receivers: &[Receiver],
@@ -136,26 +141,47 @@ pub fn receiver_target_error(
     let Some(index) = target.receiver() else {
         return f64::INFINITY;
     };
-    // A whole receiver needs no list of its cells (10⁶ indices and three gathers per
-    // epoch on a large one).
     let picked = match target {
         Target::Receiver { .. } => None,
         _ => Some(target.cells(receivers)),
     };
     let stats = receiver_stats(cells, receivers[index].cells, counts, picked.as_deref());
-    if stats.values.is_empty() || stats.unknown_cells > 0 {
+    let blocked = stats.unknown_cells > stats.dark_cells || stats.unreliable_cells > 0;
+    if stats.values.is_empty() || blocked || stats.dark_cells == stats.values.len() {
         return f64::INFINITY;
     }
-    match (target, absolute) {
-        (Target::Block { .. }, false) => stats
+    let lit = || {
+        stats
             .values
             .iter()
             .zip(&stats.sigma)
-            .map(|(v, s)| relative_error(*v, *s))
-            .fold(0.0, f64::max),
-        (Target::Block { .. }, true) => stats.sigma.iter().copied().fold(0.0, f64::max),
-        (_, false) => stats.rel_error.quadratic,
-        (_, true) => stats.rms_sigma,
+            .zip(&stats.status)
+            .filter(|(_, &status)| status != CellStatus::Dark)
+            .map(|(pair, _)| pair)
+    };
+    let dark_bound = stats.dark_bound;
+    // The dark cells' bound as an error (0 without dark cells).
+    let relative_bound = |mean: f64| {
+        if stats.dark_cells > 0 {
+            relative_error(mean, dark_bound)
+        } else {
+            0.0
+        }
+    };
+    match (target, absolute) {
+        (Target::Block { .. }, false) => {
+            let (sum, n) = lit().fold((0.0, 0usize), |(s, n), (v, _)| (s + v, n + 1));
+            let mean = sum / n as f64;
+            lit()
+                .map(|(v, s)| relative_error(*v, *s))
+                .fold(relative_bound(mean), f64::max)
+        }
+        (Target::Block { .. }, true) => lit().map(|(_, s)| *s).fold(dark_bound, f64::max),
+        (_, false) => stats
+            .rel_error_known
+            .quadratic
+            .max(relative_bound(stats.quadratic_mean_known)),
+        (_, true) => stats.rms_sigma_known.max(dark_bound),
     }
 }
 
@@ -169,6 +195,49 @@ pub fn min_hits(target: &Target, receivers: &[Receiver], cells: &[CellSums]) -> 
         .unwrap_or(0)
 }
 
+/// Epochs a run has before it judges whether its error target can be met: the
+/// forecast's constant is a median over the later half of the history.
+pub const EPOCHS_BEFORE_JUDGING: usize = 4;
+
+/// Why the error target cannot be met, if it cannot: nothing has reached the target
+/// (`nothing_scored`) after [`EPOCHS_BEFORE_JUDGING`] epochs, or the forecast needs
+/// more photons than `max_photons` or more time than `time_limit_s`. `None` while it
+/// may be met, and without a target.
+pub fn unreachable(
+    target_error: Option<f64>,
+    history: &[HistoryPoint],
+    forecast: Option<Forecast>,
+    nothing_scored: bool,
+    max_photons: u64,
+    time_limit_s: Option<f64>,
+) -> Option<String> {
+    target_error?;
+    let last = history.last()?;
+    if history.len() < EPOCHS_BEFORE_JUDGING {
+        return None;
+    }
+    if nothing_scored {
+        return Some(format!(
+            "nothing has reached the target in {} photons",
+            last.photons
+        ));
+    }
+    let f = forecast?;
+    if f.photons > max_photons {
+        return Some(format!(
+            "the forecast needs {} photons, more than the {max_photons} allowed",
+            f.photons
+        ));
+    }
+    match time_limit_s {
+        Some(limit) if f.total_s > limit => Some(format!(
+            "the forecast needs {:.1} s, more than the {limit} s time limit",
+            f.total_s
+        )),
+        _ => None,
+    }
+}
+
 /// Why a run stopped (summary.json `stop_reason`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StopReason {
@@ -177,6 +246,8 @@ pub enum StopReason {
     TargetError,
     MinHits,
     Interrupted,
+    /// The error target was found unreachable (`--stop-if-unreachable`).
+    Unreachable,
 }
 
 impl StopReason {
@@ -187,6 +258,7 @@ impl StopReason {
             StopReason::TargetError => "target_error",
             StopReason::MinHits => "min_hits",
             StopReason::Interrupted => "interrupted",
+            StopReason::Unreachable => "unreachable",
         }
     }
 }

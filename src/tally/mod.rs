@@ -62,27 +62,153 @@ impl ChunkTally {
     }
 }
 
-/// One chunk's scores in one receiver cell: the moments Σx, Σx², Σx³, Σx⁴ over the
-/// chunk's histories (each history's scores in the cell summed first, so eqs. 6–8 see
-/// per-history scores) and the crossings or contributions counted.
-/// Serialised as is by checkpoints (a shard's chunks) and MPI (a worker's chunks).
+/// One chunk's scores in one receiver cell: the count, mean and central moments of the
+/// chunk's histories that scored there ([`Moments`]; each history's scores in the cell
+/// summed first, so eqs. 6–8 see per-history scores) and the crossings or
+/// contributions counted. The chunk's other histories scored 0: [`CellSums::add`] adds
+/// them. Serialised as is by checkpoints (a shard's chunks) and MPI (a worker's chunks).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CellPartial {
     /// Global cell index over all receivers (see [`ReceiverGrid::first_cell`]).
     pub cell: u32,
     pub hits: u64,
-    pub moments: [f64; 4],
+    pub moments: Moments,
 }
 
 impl CellPartial {
     /// Adds one history's score `x` made of `hits` contributions.
     #[inline]
     pub fn add_history(&mut self, x: f64, hits: u64) {
-        let x2 = x * x;
-        for (m, v) in self.moments.iter_mut().zip([x, x2, x2 * x, x2 * x2]) {
-            *m += v;
-        }
+        self.moments.push(x);
         self.hits += hits;
+    }
+}
+
+/// Count, mean and central moments M₂, M₃, M₄ (sums of (x − x̄)ᵖ) of a set of scores,
+/// updated and merged by Pébay's pairwise formulas (Pébay 2008; Terriberry). Raw power
+/// sums Σxᵖ lose every digit of the fourth central moment to cancellation where σ/x̄ is
+/// small (a sampled direct light at σ/x̄ = 10⁻⁴), and overflow where the scores are
+/// large; these never subtract large numbers and stay finite for any score whose fourth
+/// power about the mean is finite. Merged in a fixed order, so the same bits follow from
+/// the same scores on any number of threads.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Moments {
+    pub n: u64,
+    pub mean: f64,
+    pub m2: f64,
+    pub m3: f64,
+    pub m4: f64,
+    /// The largest score (0 for none): what bounds a cell no history has reached.
+    pub max: f64,
+}
+
+impl Moments {
+    /// Adds one score.
+    #[inline]
+    pub fn push(&mut self, x: f64) {
+        self.merge(&Moments {
+            n: 1,
+            mean: x,
+            max: x,
+            ..Moments::default()
+        });
+    }
+
+    /// Adds `count` scores of 0 (the histories that did not score).
+    #[inline]
+    pub fn push_zeros(&mut self, count: u64) {
+        self.merge(&Moments {
+            n: count,
+            ..Moments::default()
+        });
+    }
+
+    /// Merges the scores of `b` in (Pébay's formulas for two sets).
+    #[inline]
+    pub fn merge(&mut self, b: &Moments) {
+        if b.n == 0 {
+            return;
+        }
+        if self.n == 0 {
+            *self = *b;
+            return;
+        }
+        let (na, nb) = (self.n as f64, b.n as f64);
+        let n = na + nb;
+        let delta = b.mean - self.mean;
+        let d_n = delta / n;
+        let d_n2 = d_n * d_n;
+        let term = delta * d_n * na * nb;
+        let a = *self;
+        self.max = a.max.max(b.max);
+        self.n += b.n;
+        // Anchored at the larger set: a few scores merged with many zeros would lose
+        // digits to 1 − nb/n in the other form.
+        self.mean = if na >= nb {
+            a.mean + d_n * nb
+        } else {
+            b.mean - d_n * na
+        };
+        self.m2 = a.m2 + b.m2 + term;
+        self.m3 = a.m3 + b.m3 + term * d_n * (na - nb) + 3.0 * d_n * (na * b.m2 - nb * a.m2);
+        self.m4 = a.m4
+            + b.m4
+            + term * d_n2 * (na * na - na * nb + nb * nb)
+            + 6.0 * d_n2 * (na * na * b.m2 + nb * nb * a.m2)
+            + 4.0 * d_n * (na * b.m3 - nb * a.m3);
+    }
+
+    /// These moments with zeros added up to `n` scores (the histories since the last
+    /// score): what they are over all `n` histories of a run.
+    #[inline]
+    pub fn over(&self, n: u64) -> Moments {
+        let mut m = *self;
+        m.push_zeros(n.saturating_sub(self.n));
+        m
+    }
+
+    /// Effective number of equal scores, (Σx)²/Σx² (0 for none): the histories that
+    /// really stand behind the mean.
+    pub fn effective_count(&self) -> f64 {
+        let sq = self.sum_sq();
+        if sq > 0.0 {
+            let s = self.sum();
+            s * s / sq
+        } else {
+            0.0
+        }
+    }
+
+    /// Σx.
+    pub fn sum(&self) -> f64 {
+        self.mean * self.n as f64
+    }
+
+    /// Σx² (M₂ + n·x̄²).
+    pub fn sum_sq(&self) -> f64 {
+        self.m2 + self.mean * self.mean * self.n as f64
+    }
+
+    /// The mean and its variance, eq. 7 squared with the unbiased n/(n − 1) variance:
+    /// M₂/(n(n − 1)); NaN below 2 scores.
+    pub fn mean_and_variance(&self) -> (f64, f64) {
+        match self.n {
+            0 => (0.0, f64::NAN),
+            1 => (self.mean, f64::NAN),
+            n => {
+                let n = n as f64;
+                (self.mean, self.m2.max(0.0) / (n * (n - 1.0)))
+            }
+        }
+    }
+
+    /// Relative variance of the variance of the mean (MCNP's VOV):
+    /// M₄/M₂² − 1/n; 1 while nothing is known (fewer than 2 scores, or all equal).
+    pub fn vov(&self) -> f64 {
+        if self.n < 2 || !(self.m2 > 0.0) {
+            return 1.0;
+        }
+        (self.m4 / (self.m2 * self.m2) - 1.0 / self.n as f64).max(0.0)
     }
 }
 
@@ -323,85 +449,54 @@ impl From<Vec<u64>> for TriangleCounts {
     }
 }
 
-/// Neumaier-compensated f64 sum: stays exact to ~1 ulp over billions of terms.
+/// Per-cell moments of the history scores, and of the cell's sampled direct light, in
+/// the run's score unit ([`score_unit`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct CompensatedSum {
-    sum: f64,
-    compensation: f64,
-}
-
-impl CompensatedSum {
-    #[inline]
-    pub fn add(&mut self, x: f64) {
-        let t = self.sum + x;
-        if self.sum.abs() >= x.abs() {
-            self.compensation += (self.sum - t) + x;
-        } else {
-            self.compensation += (x - t) + self.sum;
-        }
-        self.sum = t;
-    }
-
-    #[inline]
-    pub fn value(&self) -> f64 {
-        self.sum + self.compensation
-    }
-
-    /// The running sum and its compensation term, bit for bit (checkpoints).
-    pub fn parts(&self) -> (f64, f64) {
-        (self.sum, self.compensation)
-    }
-
-    /// The sum whose [`parts`](Self::parts) are these.
-    pub fn from_parts(sum: f64, compensation: f64) -> CompensatedSum {
-        CompensatedSum { sum, compensation }
-    }
-}
-
-/// Per-cell moments of the history scores, and of the cell's sampled direct light.
-#[derive(Clone, Copy, Debug, Default)]
 pub struct CellSums {
-    /// Σx, Σx², Σx³, Σx⁴ of the photon histories' scores.
-    pub moments: [CompensatedSum; 4],
+    /// The photon histories' scores: [`Moments`] over the histories up to the last one
+    /// that scored here (`photons.n`); those after it scored 0 ([`Moments::over`]).
+    pub photons: Moments,
     /// Contributions scored: photon crossings and connections, and direct-light
     /// replicates that saw light.
     pub hits: u64,
-    /// Σy, Σy², Σy³, Σy⁴ of the direct-light replicates (next-event receivers; see
-    /// `trace::direct`), in the receiver's unit; `Tallies::direct_replicates` of them.
-    pub direct: [CompensatedSum; 4],
+    /// Scoring histories: those with a non-zero score in the cell.
+    pub scoring_histories: u64,
+    /// The direct-light replicates (next-event receivers; see `trace::direct`), all
+    /// `Tallies::direct_replicates` of them.
+    pub direct: Moments,
 }
 
 impl CellSums {
+    /// Adds a chunk's partial whose first photon is `first` (call in photon order): the
+    /// histories since the cell's last score scored 0 here.
     #[inline]
-    fn add(&mut self, partial: &CellPartial) {
-        for (total, part) in self.moments.iter_mut().zip(partial.moments) {
-            total.add(part);
-        }
+    fn add(&mut self, partial: &CellPartial, first: u64) {
+        self.photons
+            .push_zeros(first.saturating_sub(self.photons.n));
+        self.photons.merge(&partial.moments);
         self.hits += partial.hits;
+        self.scoring_histories += partial.moments.n;
     }
 
     /// Adds one direct-light replicate `y` (call in replicate order); a replicate that
     /// saw light counts as a hit.
     #[inline]
     pub fn add_direct(&mut self, y: f64) {
-        let y2 = y * y;
-        for (m, v) in self.direct.iter_mut().zip([y, y2, y2 * y, y2 * y2]) {
-            m.add(v);
-        }
+        self.direct.push(y);
         self.hits += (y != 0.0) as u64;
     }
+}
 
-    pub fn sum(&self) -> f64 {
-        self.moments[0].value()
-    }
-
-    pub fn sum_sq(&self) -> f64 {
-        self.moments[1].value()
-    }
-
-    /// Σy and Σy² of the direct-light replicates.
-    pub fn direct_sums(&self) -> (f64, f64) {
-        (self.direct[0].value(), self.direct[1].value())
+/// The unit scores are tallied in, for a scene of total flux `total_flux_lm`: the power
+/// of two nearest the flux (1 for a scene without light). Scores scale with the flux, so
+/// in this unit their moments neither overflow nor underflow whatever the light's level
+/// (Σx⁴ of a 10⁸⁰ cd source would), and dividing by a power of two is exact: the
+/// relative errors and VOVs are the same bits at any level.
+pub fn score_unit(total_flux_lm: f64) -> f64 {
+    if total_flux_lm > 0.0 && total_flux_lm.is_finite() {
+        2f64.powi((total_flux_lm.log2().round() as i32).min(f64::MAX_EXP - 1))
+    } else {
+        1.0
     }
 }
 
@@ -425,6 +520,8 @@ pub struct Tallies {
     pub direct_rays: u64,
     /// The scene emits no light: every value is exactly 0, with no error.
     pub dark: bool,
+    /// The unit of the cells' scores ([`score_unit`]), in the receivers' units.
+    pub score_unit: f64,
 }
 
 /// What a cell's sums were accumulated over.
@@ -434,19 +531,24 @@ pub struct Counts {
     pub direct_replicates: u64,
     /// No light at all: nothing scored means exactly 0.
     pub dark: bool,
+    /// The unit of the cells' scores ([`score_unit`]).
+    pub unit: f64,
 }
 
 impl Tallies {
-    pub fn new(triangles: usize, cells: usize) -> Tallies {
+    /// Empty tallies whose scores are in `score_unit` ([`score_unit`]).
+    pub fn new(triangles: usize, cells: usize, score_unit: f64) -> Tallies {
         Tallies {
             triangle_hits: TriangleCounts::zeros(triangles * CODES_PER_TRIANGLE),
             cells: vec![CellSums::default(); cells],
+            score_unit,
             ..Tallies::default()
         }
     }
 
     /// Folds one chunk of `photons` photons in (call in photon order).
     pub fn accumulate(&mut self, chunk: &ChunkTally, photons: u64) {
+        let first = self.photons;
         self.photons += photons;
         self.rays += chunk.rays;
         self.killed_by_bounce_cap += chunk.killed_by_bounce_cap;
@@ -455,7 +557,7 @@ impl Tallies {
         }
         self.triangle_hits.increment_each(&chunk.deposits);
         for p in &chunk.scores {
-            self.cells[p.cell as usize].add(p);
+            self.cells[p.cell as usize].add(p, first);
         }
     }
 
@@ -465,6 +567,7 @@ impl Tallies {
             photons: self.photons,
             direct_replicates: self.direct_replicates,
             dark: self.dark,
+            unit: self.score_unit,
         }
     }
 
@@ -484,17 +587,94 @@ impl Tallies {
 mod tests {
     use super::*;
 
+    /// Central moments of `x` by two passes in f64 (mean, then Σ(x − x̄)ᵖ): accurate
+    /// where the scores' spread is not tiny against their mean.
+    fn two_pass(x: &[f64]) -> [f64; 4] {
+        let n = x.len() as f64;
+        let mean = x.iter().sum::<f64>() / n;
+        let m = |p: i32| x.iter().map(|v| (v - mean).powi(p)).sum::<f64>();
+        [mean, m(2), m(3), m(4)]
+    }
+
+    fn moments_of(x: &[f64]) -> Moments {
+        let mut m = Moments::default();
+        x.iter().for_each(|&v| m.push(v));
+        m
+    }
+
+    fn close(a: f64, b: f64, rel: f64) -> bool {
+        (a - b).abs() <= rel * b.abs().max(1e-300)
+    }
+
     #[test]
-    fn compensated_sum_keeps_twelve_digits_over_a_billion_terms() {
-        // 10⁹ increments of 0.1 (not representable): a naive f64 sum drifts in the 8th
-        // digit; the compensated one must keep 12 significant digits.
-        let mut s = CompensatedSum::default();
-        let n = 1_000_000_000u64;
-        for _ in 0..n {
-            s.add(0.1);
+    fn moments_merge_in_any_split_to_the_two_pass_values() {
+        let mut rng = crate::rng::aux_stream(11);
+        let x: Vec<f64> = (0..5000)
+            .map(|k| match k % 7 {
+                0 => 0.0,
+                _ => crate::sampling::uniform(&mut rng).powi(3) * 40.0,
+            })
+            .collect();
+        let [mean, m2, m3, m4] = two_pass(&x);
+        for split in [1, 17, 2500, 4999] {
+            let mut m = moments_of(&x[..split]);
+            m.merge(&moments_of(&x[split..]));
+            assert_eq!(m.n, 5000);
+            for (got, want) in [(m.mean, mean), (m.m2, m2), (m.m3, m3), (m.m4, m4)] {
+                assert!(close(got, want, 1e-12), "split {split}: {got} vs {want}");
+            }
         }
-        let exact = 0.1 * n as f64;
-        assert!(((s.value() - exact) / exact).abs() < 1e-12, "{}", s.value());
+        // Zeros added in bulk are zeros pushed one by one.
+        let mut bulk = moments_of(&x);
+        bulk.push_zeros(300);
+        let mut one_by_one = moments_of(&x);
+        (0..300).for_each(|_| one_by_one.push(0.0));
+        assert!(close(bulk.m4, one_by_one.m4, 1e-12) && close(bulk.mean, one_by_one.mean, 1e-13));
+        assert_eq!(moments_of(&x).over(5300).n, 5300);
+    }
+
+    #[test]
+    fn moments_keep_their_digits_where_sigma_is_a_millionth_of_the_mean() {
+        // Replicates 1 + d with d ~ 10⁻⁶·(uniform³ − ½), dyadic so that 1 + d − 1 = d
+        // exactly: the central moments of y are those of d, which two passes give to
+        // ~1e-15 (d's spread is not small against its mean). Raw power sums lose the
+        // fourth central moment entirely here (Σy⁴ ≈ n, M₄ ≈ n·10⁻²⁴).
+        let mut rng = crate::rng::aux_stream(12);
+        let d: Vec<f64> = (0..20_000)
+            .map(|_| {
+                let u = crate::sampling::uniform(&mut rng).powi(3) - 0.5;
+                (u * 2f64.powi(32)).round() * 2f64.powi(-52)
+            })
+            .collect();
+        let y: Vec<f64> = d.iter().map(|v| 1.0 + v).collect();
+        assert!(y.iter().zip(&d).all(|(y, d)| y - 1.0 == *d));
+        let [_, m2, m3, m4] = two_pass(&d);
+        let m = moments_of(&y);
+        assert!(close(m.m2, m2, 1e-9), "M₂ {} vs {m2}", m.m2);
+        assert!(close(m.m3, m3, 1e-6), "M₃ {} vs {m3}", m.m3);
+        assert!(close(m.m4, m4, 1e-8), "M₄ {} vs {m4}", m.m4);
+        let vov = m4 / (m2 * m2) - 1.0 / d.len() as f64;
+        assert!(close(m.vov(), vov, 1e-8), "VOV {} vs {vov}", m.vov());
+        // The same scores at another level: relative σ and VOV to rounding.
+        for scale in [1e-10, 1e30, 2f64.powi(40)] {
+            let ys: Vec<f64> = y.iter().map(|v| v * scale).collect();
+            let s = moments_of(&ys);
+            let rel = |m: &Moments| m.mean_and_variance().1.sqrt() / m.mean;
+            assert!(close(rel(&s), rel(&m), 1e-9) && close(s.vov(), m.vov(), 1e-8));
+        }
+    }
+
+    #[test]
+    fn the_score_unit_is_a_power_of_two_near_the_flux() {
+        assert_eq!(score_unit(1.0), 1.0);
+        assert_eq!(score_unit(1000.0), 1024.0);
+        assert_eq!(score_unit(0.0), 1.0);
+        assert_eq!(score_unit(f64::MAX), 2f64.powi(1023));
+        let flux = 4.0 * std::f64::consts::PI * 1e200;
+        let unit = score_unit(flux);
+        assert!(unit.is_finite() && (flux / unit) > 0.7 && (flux / unit) < 1.5);
+        assert_eq!(unit.log2().fract(), 0.0);
+        assert!(score_unit(1e-300) > 0.0);
     }
 
     #[test]

@@ -359,6 +359,8 @@ impl DirectLight<'_> {
         let cell_point = |a, b| grid.cell_point((i, j), a, b);
         let choice = LightChoice::for_cell(self.emitters, grid, cell_point(0.5, 0.5));
         let samples = m * m;
+        // Replicates are tallied in the run's score unit (exact: a power of two).
+        let score_scale = 1.0 / crate::tally::score_unit(self.emitters.total_flux_lm);
         let mut rays = 0;
         let mut block_start = first;
         while block_start < first + count {
@@ -398,7 +400,7 @@ impl DirectLight<'_> {
                 }
             }
             for &y in &s.totals {
-                sums.add_direct(y);
+                sums.add_direct(y * score_scale);
             }
             rays += s.rays.len() as u64;
             block_start += block;
@@ -513,28 +515,18 @@ impl DirectSchedule {
 pub fn relative_variances(cells: &[CellSums], photons: u64, replicates: u64) -> (f64, f64) {
     let (mut a, mut b) = (0.0, 0.0);
     for c in cells {
-        let (ys, yss) = c.direct_sums();
-        let direct = if replicates > 0 {
-            ys / replicates as f64
-        } else {
-            0.0
-        };
-        let photon = if photons > 0 {
-            c.sum() / photons as f64
-        } else {
-            0.0
-        };
+        // Per replicate and per history: n times the variance of the mean.
+        let (direct, direct_var) = c.direct.over(replicates).mean_and_variance();
+        let (photon, photon_var) = c.photons.over(photons).mean_and_variance();
         let value = direct + photon;
         if !(value > 0.0) {
             continue;
         }
-        if replicates > 1 {
-            let r = replicates as f64;
-            a += ((yss / r - direct * direct) * r / (r - 1.0)).max(0.0) / (value * value);
+        if direct_var >= 0.0 {
+            a += direct_var * replicates as f64 / (value * value);
         }
-        if photons > 1 {
-            let n = photons as f64;
-            b += ((c.sum_sq() / n - photon * photon) * n / (n - 1.0)).max(0.0) / (value * value);
+        if photon_var >= 0.0 {
+            b += photon_var * photons as f64 / (value * value);
         }
     }
     (a, b)

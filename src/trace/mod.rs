@@ -361,7 +361,8 @@ impl<'a> Tracer<'a> {
 
     /// Empty tallies for this scene's triangles and receiver cells.
     pub fn new_tallies(&self) -> Tallies {
-        let mut t = Tallies::new(self.geometry.triangle_count(), self.cell_count());
+        let unit = crate::tally::score_unit(self.emitters.total_flux_lm);
+        let mut t = Tallies::new(self.geometry.triangle_count(), self.cell_count(), unit);
         t.dark = !(self.emitters.total_flux_lm > 0.0);
         t
     }
@@ -392,7 +393,10 @@ impl<'a> Tracer<'a> {
         tally: &mut ChunkTally,
     ) {
         tally.clear();
-        let flux = self.emitters.total_flux_lm;
+        // Scores come out in the tallies' score unit: the flux divided by it (a power of
+        // two, so every score is the same bits as in lm, scaled exactly).
+        let flux =
+            self.emitters.total_flux_lm / crate::tally::score_unit(self.emitters.total_flux_lm);
         let live = if flux > 0.0 { count as usize } else { 0 };
         // Every photon ray is a closest-hit ray from t = 0 to ∞: `tnear` and `tfar` are
         // set once here and never change while the batch shrinks.
@@ -841,16 +845,26 @@ mod tests {
         let mut pending = vec![(1, 5, 1.0), (0, 5, 2.0), (1, 5, 3.0), (1, 2, 4.0)];
         let (mut acc, mut out) = (Vec::new(), Vec::new());
         fold_histories(&mut pending, &mut acc, &mut out);
-        let cell = |cell, hits, m: [f64; 4]| CellPartial {
+        // Cell 2: one history of 4; cell 5: histories of 2 and 4 (mean 3, M₂ = 2, M₃ = 0,
+        // M₄ = 2).
+        let moments = |n, mean, m2, m4, max| crate::tally::Moments {
+            n,
+            mean,
+            m2,
+            m3: 0.0,
+            m4,
+            max,
+        };
+        let cell = |cell, hits, moments| CellPartial {
             cell,
             hits,
-            moments: m,
+            moments,
         };
         assert_eq!(
             out,
             vec![
-                cell(2, 1, [4.0, 16.0, 64.0, 256.0]),
-                cell(5, 3, [6.0, 20.0, 72.0, 272.0])
+                cell(2, 1, moments(1, 4.0, 0.0, 0.0, 4.0)),
+                cell(5, 3, moments(2, 3.0, 2.0, 2.0, 4.0))
             ]
         );
         assert!(acc.iter().all(|p| p.hits == 0), "scratch left clean");
