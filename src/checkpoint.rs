@@ -38,8 +38,10 @@ const MAGIC: &[u8; 8] = b"LUXCKPT1";
 /// Bumped whenever the payload's layout changes, or the numbers a run draws for the same
 /// seed (photon streams, the direct light's sampling): older files are refused, so a run
 /// never continues or merges another version's numbers. 2: photon streams seeded by
-/// `rng::PhotonStreams`, shadow edges refine the direct light's cells.
-pub const FORMAT_VERSION: u32 = 2;
+/// `rng::PhotonStreams`, shadow edges refine the direct light's cells. 3: the bounce cap
+/// follows the highest albedo past the old 100,000 (up to `trace::MAX_BOUNCE_CAP`), which
+/// changes the numbers of scenes with an albedo above 0.99972 or lossless materials.
+pub const FORMAT_VERSION: u32 = 3;
 const HEADER_BYTES: usize = 8 + 4 + 8 + 4;
 /// Seconds between checkpoints unless `--checkpoint-every` says otherwise.
 pub const DEFAULT_PERIOD_S: f64 = 60.0;
@@ -858,7 +860,7 @@ fn check_shards(
 mod tests {
     use super::*;
 
-    /// Length and CRC-32 of the fixed checkpoint below, encoded by format 2.
+    /// Length and CRC-32 of the fixed checkpoint below, encoded by format 3.
     const GOLDEN_LEN: usize = 124;
     const GOLDEN_CRC: u32 = 2_018_349_533;
 
@@ -888,7 +890,7 @@ mod tests {
         };
         let bytes = c.encode().unwrap();
         assert_eq!(Checkpoint::decode(&bytes, "c").unwrap(), c);
-        // Format 2's encoding of this checkpoint: a change here needs FORMAT_VERSION bumped.
+        // Format 3's encoding of this checkpoint: a change here needs FORMAT_VERSION bumped.
         assert_eq!(
             (bytes.len(), crc32fast::hash(&bytes)),
             (GOLDEN_LEN, GOLDEN_CRC),

@@ -79,6 +79,9 @@ pub struct RunSetup {
     pub total_flux_lm: f64,
     pub light_flux_lm: Vec<f64>,
     pub bounce_cap: u32,
+    /// ρ_max^cap, the a-priori bound on the light the cap drops; `None` for lossless
+    /// materials (`trace::bounce_cap_a_priori_bound`).
+    pub bounce_cap_a_priori: Option<f64>,
     pub threads: usize,
     /// Per receiver: what `auto` (or `--estimator`) resolved to.
     pub estimators: Vec<Estimator>,
@@ -92,6 +95,7 @@ impl RunSetup {
             total_flux_lm: tracer.emitters.total_flux_lm,
             light_flux_lm: tracer.emitters.flux_lm.clone(),
             bounce_cap: tracer.max_bounces,
+            bounce_cap_a_priori: tracer.bounce_cap_a_priori,
             threads,
             estimators: tracer.receivers.iter().map(|g| g.estimator).collect(),
         }
@@ -257,9 +261,11 @@ impl<'s> Engine<'s> {
         caster: &'s dyn RayCaster,
     ) -> Result<Engine<'s>> {
         let threads = options.threads.max(1);
+        let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
+        crate::trace::endless::refuse_endless(scene, &tracer.emitters)?;
         Ok(Engine {
             pool: thread_pool(threads)?,
-            tracer: Tracer::new(scene, caster, options.seed, options.estimator),
+            tracer,
             threads,
             direct_sides: std::sync::OnceLock::new(),
         })

@@ -628,8 +628,33 @@ pub struct Reliability {
     /// scene mean for `global`).
     #[serde(deserialize_with = "null_as_nan::f64")]
     pub vov: f64,
-    /// The error can be trusted: FOM stable and VOV < 0.1.
+    /// The bounce cap's bias bound (`bounce_cap_bias_bound`) is unknown, or not below
+    /// [`BOUNCE_CAP_BIAS_SHARE`] of the σ_rel of the target or of the scene map: the
+    /// error is then not reliable, whatever the FOM and VOV say.
+    #[serde(default)]
+    pub bounce_cap_biased: bool,
+    /// The error can be trusted: FOM stable, VOV < 0.1 and the bounce cap's bias bound
+    /// below 1 % of the σ.
     pub reliable: bool,
+}
+
+/// The share of a figure's σ_rel the bounce cap's bias bound must stay below.
+pub const BOUNCE_CAP_BIAS_SHARE: f64 = 0.01;
+
+impl Reliability {
+    /// Judges the bounce cap's bias bound `bound` (`None`: unknown) against the σ_rel of
+    /// the figures reported: unreliable unless it is below [`BOUNCE_CAP_BIAS_SHARE`] of
+    /// each (a bound of 0 passes; a σ_rel that is 0 or unknown gives nothing to compare).
+    pub fn with_bounce_cap(mut self, bound: Option<f64>, sigma_rel: &[f64]) -> Reliability {
+        let below = |b: f64| {
+            (sigma_rel.iter())
+                .filter(|s| s.is_finite() && **s > 0.0)
+                .all(|s| b == 0.0 || b < BOUNCE_CAP_BIAS_SHARE * s)
+        };
+        self.bounce_cap_biased = !bound.is_some_and(below);
+        self.reliable &= !self.bounce_cap_biased;
+        self
+    }
 }
 
 /// Judges the history of (elapsed, photons, error) of a target and its VOV.
@@ -651,6 +676,7 @@ pub fn reliability(history: &[forecast::HistoryPoint], vov: f64) -> Reliability 
         fom,
         fom_stable,
         vov,
+        bounce_cap_biased: false,
         reliable: fom_stable && vov < 0.1,
     }
 }
