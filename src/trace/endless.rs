@@ -11,23 +11,26 @@ use glam::DVec3;
 use rand_pcg::Pcg32;
 use std::collections::HashMap;
 
-/// The material keeps every photon it receives (its roulette never ends a path: albedo
-/// above 1 − 2⁻³², [`super::survival_threshold`]) and lets none through: Lambertian
-/// reflection and ideal mirrors only (glossy lobes lose energy, transmission lets photons
-/// cross a closed surface).
+/// The material keeps every photon it receives: its roulette never ends a path (albedo
+/// above 1 − 2⁻³², [`super::survival_threshold`]) and it has no glossy lobe (GGX lobes
+/// lose energy). Lambertian reflection and transmission, ideal mirrors and clear glass.
 pub fn keeps_every_photon(m: &Material) -> bool {
-    m.transmittance == 0.0
-        && m.specular_transmittance == 0.0
-        && m.glossy_reflectance == 0.0
+    m.glossy_reflectance == 0.0
         && m.glossy_transmittance == 0.0
         && super::survival_threshold(m.albedo()) == 1 << 32
 }
 
-/// Every edge of the triangles, their vertices welded by position, is shared by an even
-/// number of triangles: the surface has no boundary (mod 2), so how often a ray from a
-/// point crosses it has the same parity along every ray, odd exactly when the point is
-/// enclosed.
-pub fn is_closed(triangles: &[[u32; 3]], vertices: &[glam::Vec3]) -> bool {
+/// [`keeps_every_photon`] and lets none through: no photon crosses a surface of it.
+pub fn traps(m: &Material) -> bool {
+    keeps_every_photon(m) && m.transmittance == 0.0 && m.specular_transmittance == 0.0
+}
+
+/// Per triangle, whether it belongs to a closed surface: its connected component (the
+/// triangles joined through shared edges, vertices welded by position) has every edge
+/// shared by an even number of its triangles, so it has no boundary (mod 2) and how
+/// often a ray from a point crosses it has the same parity along every ray, odd exactly
+/// when the point is enclosed.
+pub fn closed_triangles(triangles: &[[u32; 3]], vertices: &[glam::Vec3]) -> Vec<bool> {
     let mut welded: HashMap<[u32; 3], u32> = HashMap::new();
     let id: Vec<u32> = vertices
         .iter()
@@ -37,16 +40,38 @@ pub fn is_closed(triangles: &[[u32; 3]], vertices: &[glam::Vec3]) -> bool {
             *welded.entry(key).or_insert(next)
         })
         .collect();
-    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
-    for t in triangles {
+    // Union-find over triangles joined through an edge.
+    let mut parent: Vec<usize> = (0..triangles.len()).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    let mut edges: HashMap<(u32, u32), (u32, usize)> = HashMap::new();
+    for (k, t) in triangles.iter().enumerate() {
         let c = t.map(|i| id[i as usize]);
         for (a, b) in [(c[0], c[1]), (c[1], c[2]), (c[2], c[0])] {
-            if a != b {
-                *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            if a == b {
+                continue;
             }
+            let e = edges.entry((a.min(b), a.max(b))).or_insert((0, k));
+            e.0 += 1;
+            let (ra, rb) = (root(&mut parent, e.1), root(&mut parent, k));
+            parent[ra] = rb;
         }
     }
-    edges.values().all(|n| n % 2 == 0)
+    let mut open = vec![false; triangles.len()];
+    for &(count, k) in edges.values() {
+        if count % 2 == 1 {
+            let r = root(&mut parent, k);
+            open[r] = true;
+        }
+    }
+    (0..triangles.len())
+        .map(|k| !open[root(&mut parent, k)])
+        .collect()
 }
 
 /// How many triangles the ray from `o` along `d` crosses (Möller–Trumbore in f64).
@@ -84,11 +109,11 @@ const ORIGINS_PER_LIGHT: usize = 4;
 
 /// Refuses, in one line, a scene whose exact answer is infinite: every material its
 /// triangles use keeps every photon ([`keeps_every_photon`]), no instanced object (whose
-/// meshes are not welded here), the triangles closed ([`is_closed`]) and some light's
-/// photons starting inside them (odd crossings along three rays from each of a few
-/// sampled origins). Each test is sufficient only together with the others, and each
-/// errs towards running: a scene it lets through runs with the largest cap and says
-/// what the cap stopped.
+/// meshes are not looked at here), and some light's photons start enclosed by closed
+/// surfaces ([`closed_triangles`]) that let no photon through ([`traps`]): odd crossings
+/// of those along three rays from each of a few sampled photon origins. Such a photon
+/// can never leave and is never absorbed. Every test errs towards running: a scene it
+/// lets through runs with the largest cap and says what the cap stopped.
 pub fn refuse_endless(scene: &Scene, emitters: &Emitters) -> Result<()> {
     let g = &scene.geometry;
     if !(emitters.total_flux_lm > 0.0) || g.triangle_count() == 0 || !g.instanced.is_empty() {
@@ -99,9 +124,24 @@ pub fn refuse_endless(scene: &Scene, emitters: &Emitters) -> Result<()> {
         used[m as usize] = true;
     }
     let lossless = (used.iter().zip(&scene.materials)).all(|(&u, m)| !u || keeps_every_photon(m));
-    if !lossless || !is_closed(&g.triangles, &g.vertices) {
+    if !lossless {
         return Ok(());
     }
+    let closed = closed_triangles(&g.triangles, &g.vertices);
+    let walls: Vec<[u32; 3]> = (g.triangles.iter().enumerate())
+        .filter(|&(k, _)| closed[k] && traps(&scene.materials[g.material.get(k) as usize]))
+        .map(|(_, t)| *t)
+        .collect();
+    if walls.is_empty() {
+        return Ok(());
+    }
+    // The walls' own components may have lost triangles to the filter (a closed surface
+    // partly of glass): only the ones still closed count.
+    let still_closed = closed_triangles(&walls, &g.vertices);
+    let walls: Vec<[u32; 3]> = (walls.iter().zip(&still_closed))
+        .filter(|(_, &c)| c)
+        .map(|(t, _)| *t)
+        .collect();
     let mut rng = Pcg32::new(0x5eed_c105ed, 0);
     for (light, &flux) in emitters.flux_lm.iter().enumerate() {
         if !(flux > 0.0) {
@@ -109,19 +149,20 @@ pub fn refuse_endless(scene: &Scene, emitters: &Emitters) -> Result<()> {
         }
         for _ in 0..ORIGINS_PER_LIGHT {
             let (o, _) = emitters.sample(light, &mut rng);
-            let enclosed = PROBES.iter().all(|d| {
-                let d = DVec3::from_array(*d).normalize();
-                crossings(&g.triangles, &g.vertices, o, d) % 2 == 1
-            });
+            let enclosed = !walls.is_empty()
+                && PROBES.iter().all(|d| {
+                    let d = DVec3::from_array(*d).normalize();
+                    crossings(&walls, &g.vertices, o, d) % 2 == 1
+                });
             if enclosed {
                 let label = scene.lights.get(light).map_or("a light", |l| &l.label);
                 return Err(Error::input(
                     scene.path.display().to_string(),
                     format!(
                         "the exact answer is infinite: every surface keeps all the light it \
-                         receives (albedo 1, no absorption or transmission) and the geometry is \
-                         closed around {label}, so no photon ever ends; give a material an albedo \
-                         below 1 or open the geometry"
+                         receives (albedo 1, nothing absorbed) and closed opaque surfaces enclose \
+                         {label}, so no photon ever ends; give a material an albedo below 1 or \
+                         open the geometry"
                     ),
                 ));
             }
@@ -167,9 +208,16 @@ mod tests {
     #[test]
     fn a_welded_cube_is_closed_and_encloses_its_centre() {
         let (t, v) = cube(false);
-        assert!(is_closed(&t, &v));
+        assert!(closed_triangles(&t, &v).iter().all(|&c| c));
         let (to, vo) = cube(true);
-        assert!(!is_closed(&to, &vo));
+        assert!(closed_triangles(&to, &vo).iter().all(|&c| !c));
+        // A closed cube beside an open one: only the first one's triangles are closed.
+        let (mut both, mut bv) = (t.clone(), v.clone());
+        let shift = Vec3::new(3.0, 0.0, 0.0);
+        both.extend(to.iter().map(|tri| tri.map(|i| i + v.len() as u32)));
+        bv.extend(vo.iter().map(|p| *p + shift));
+        let closed = closed_triangles(&both, &bv);
+        assert!(closed[..12].iter().all(|&c| c) && closed[12..].iter().all(|&c| !c));
         for d in PROBES {
             let d = DVec3::from_array(d).normalize();
             assert_eq!(crossings(&t, &v, DVec3::splat(0.5), d), 1);
@@ -180,17 +228,22 @@ mod tests {
     #[test]
     fn only_lossless_opaque_materials_keep_every_photon() {
         let white = Material::lambertian("w", 1.0);
-        assert!(keeps_every_photon(&white));
+        assert!(traps(&white));
         assert!(!keeps_every_photon(&Material::lambertian("g", 0.99995)));
         let glass = Material {
             specular_transmittance: 1.0,
             ..Material::lambertian("glass", 0.0)
         };
-        assert!(!keeps_every_photon(&glass));
+        assert!(keeps_every_photon(&glass) && !traps(&glass));
+        let glossy = Material {
+            glossy_reflectance: 1.0,
+            ..Material::lambertian("glossy", 0.0)
+        };
+        assert!(!keeps_every_photon(&glossy));
         let mirror = Material {
             specular_reflectance: 1.0,
             ..Material::lambertian("m", 0.0)
         };
-        assert!(keeps_every_photon(&mirror));
+        assert!(traps(&mirror));
     }
 }
