@@ -185,7 +185,7 @@ fn open_lossless_scene_runs_and_bounds_the_cap_by_what_it_stopped() {
         let bound = s.bounce_cap_bias_bound.expect("none capped: a bound");
         assert!((bound - 2.995_732_273_553_991 / photons as f64).abs() < 1e-15);
         let sigma_rel = global_sigma_rel(&s);
-        let biased = !(bound < BOUNCE_CAP_BIAS_SHARE * sigma_rel);
+        let biased = bound >= BOUNCE_CAP_BIAS_SHARE * sigma_rel;
         eprintln!("{photons} photons: bound {bound:e}, σ_rel {sigma_rel:e}, biased {biased}");
         assert_eq!(s.reliability.bounce_cap_biased, biased, "{photons} photons");
         if biased {
