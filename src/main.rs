@@ -818,15 +818,15 @@ fn print_run(args: &RunArgs, s: &summary::Summary, out: &Path) {
 
 /// Why the bounce cap makes a run's error unreliable, in words.
 fn bounce_cap_verdict(s: &summary::Summary) -> String {
-    let capped = format!(
-        "{} photons stopped by the bounce cap of {} bounces",
-        s.photons_killed_by_bounce_cap, s.bounce_cap
-    );
+    let (k, cap) = (s.photons_killed_by_bounce_cap, s.bounce_cap);
     match s.bounce_cap_bias_bound {
-        None => format!("{capped} in a scene with lossless materials: the light they dropped is unknown"),
+        None => format!(
+            "{k} photons stopped by the bounce cap of {cap} bounces in a scene with lossless \
+             materials: the light they dropped is unknown"
+        ),
         Some(b) => format!(
-            "{capped}; the light they can have dropped ({:.3e} of it) is not below 1 % of the error",
-            b
+            "the light the bounce cap of {cap} bounces can have dropped, {b:.3e} of it \
+             ({k} photons stopped), is not below 1 % of the error"
         ),
     }
 }
