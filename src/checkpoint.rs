@@ -38,7 +38,10 @@ const MAGIC: &[u8; 8] = b"LUXCKPT1";
 /// Bumped whenever the payload's layout changes, or the numbers a run draws for the same
 /// seed (photon streams, the direct light's sampling): older files are refused, so a run
 /// never continues or merges another version's numbers. 2: photon streams seeded by
-/// `rng::PhotonStreams`, shadow edges refine the direct light's cells.
+/// `rng::PhotonStreams`, shadow edges refine the direct light's cells. 3: the bounce cap
+/// follows the highest albedo past the old 100,000 (up to `trace::MAX_BOUNCE_CAP`), which
+/// changes the numbers of scenes with an albedo above 0.99972 or lossless materials; the
+/// cells hold central moments in a score unit (`tally::Moments`), not power sums.
 pub const FORMAT_VERSION: u32 = 3;
 const HEADER_BYTES: usize = 8 + 4 + 8 + 4;
 /// Seconds between checkpoints unless `--checkpoint-every` says otherwise.

@@ -39,7 +39,7 @@ pub struct WireChunk {
     scores: Vec<CellPartial>,
     rays: u64,
     killed_by_bounce_cap: u64,
-    history_hits: [u64; 4],
+    history_hits: [u128; 4],
 }
 
 impl WireChunk {
@@ -172,5 +172,26 @@ pub mod mpi {
             let wire: Vec<WireChunk> = out.iter().map(WireChunk::of).collect();
             root.send(&encode(&wire)[..]);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_chunk_travels_with_its_history_moments_exact() {
+        // Σk⁴ of three 100,000-hit histories is 3·10²⁰, past u64: sent and received exactly.
+        let mut c = ChunkTally::default();
+        c.record_histories(100_000, 3);
+        c.rays = 300_003;
+        c.killed_by_bounce_cap = 1;
+        let bytes = postcard::to_stdvec(&vec![WireChunk::of(&c)]).unwrap();
+        let wire: Vec<WireChunk> = postcard::from_bytes(&bytes).unwrap();
+        let mut back = ChunkTally::default();
+        wire.into_iter().next().unwrap().into_chunk(&mut back);
+        assert_eq!(back.history_hits, c.history_hits);
+        assert_eq!(back.history_hits[3], 300_000_000_000_000_000_000);
+        assert_eq!((back.rays, back.killed_by_bounce_cap), (300_003, 1));
     }
 }

@@ -833,6 +833,24 @@ fn print_run(args: &RunArgs, s: &summary::Summary, out: &Path) {
             s.global.mean_illuminance_lx,
             100.0 * s.global.rel_error.arithmetic
         );
+        if s.reliability.bounce_cap_biased {
+            println!("  not reliable: {}", bounce_cap_verdict(s));
+        }
+    }
+}
+
+/// Why the bounce cap makes a run's error unreliable, in words.
+fn bounce_cap_verdict(s: &summary::Summary) -> String {
+    let (k, cap) = (s.photons_killed_by_bounce_cap, s.bounce_cap);
+    match s.bounce_cap_bias_bound {
+        None => format!(
+            "{k} photons stopped by the bounce cap of {cap} bounces in a scene with lossless \
+             materials: the light they dropped is unknown"
+        ),
+        Some(b) => format!(
+            "the light the bounce cap of {cap} bounces can have dropped, {b:.3e} of it \
+             ({k} photons stopped), is not below 1 % of the error"
+        ),
     }
 }
 

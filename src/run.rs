@@ -79,6 +79,9 @@ pub struct RunSetup {
     pub total_flux_lm: f64,
     pub light_flux_lm: Vec<f64>,
     pub bounce_cap: u32,
+    /// ρ_max^cap, the a-priori bound on the light the cap drops; `None` for lossless
+    /// materials (`trace::bounce_cap_a_priori_bound`).
+    pub bounce_cap_a_priori: Option<f64>,
     pub threads: usize,
     /// Per receiver: what `auto` (or `--estimator`) resolved to.
     pub estimators: Vec<Estimator>,
@@ -92,6 +95,7 @@ impl RunSetup {
             total_flux_lm: tracer.emitters.total_flux_lm,
             light_flux_lm: tracer.emitters.flux_lm.clone(),
             bounce_cap: tracer.max_bounces,
+            bounce_cap_a_priori: tracer.bounce_cap_a_priori,
             threads,
             estimators: tracer.receivers.iter().map(|g| g.estimator).collect(),
         }
@@ -269,6 +273,7 @@ impl<'s> Engine<'s> {
                 ),
             ));
         }
+        crate::trace::endless::refuse_endless(scene, &tracer.emitters)?;
         Ok(Engine {
             pool: thread_pool(threads)?,
             tracer,
@@ -728,6 +733,7 @@ fn next_schedule_point(done: u64) -> u64 {
 
 /// Why the run's error target cannot be met, if it cannot ([`unreachable`]): nothing has
 /// scored in the target's cells, or the forecast is beyond the photon or time budget.
+/// Never once the target is met.
 pub fn target_unreachable(
     scene: &Scene,
     options: &RunOptions,
@@ -747,6 +753,13 @@ pub fn target_unreachable(
                 _ => cells.iter().all(|c| c.hits == 0),
             }
         });
+    let met = options
+        .stop
+        .target_error
+        .is_some_and(|goal| history.last().is_some_and(|p| p.rel_error <= goal));
+    if met {
+        return None;
+    }
     unreachable(
         options.stop.target_error,
         history,

@@ -11,6 +11,7 @@ use crate::stats::{
     cell_vov, direct_estimate, figure_of_merit, map_stats, mean_illuminance_sigma_lx,
     mean_illuminance_vov, receiver_stats, reliability, Averaged, CellStatus, MapKind, Reliability,
 };
+use crate::trace::bounce_cap_bias_bound;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -45,6 +46,11 @@ pub struct Summary {
     pub absolute_error: bool,
     pub bounce_cap: u32,
     pub photons_killed_by_bounce_cap: u64,
+    /// The largest share of the light the bounce cap can have dropped (docs/method.md,
+    /// *Bounce cap*): ρ_max^cap ≤ 1e-12 below lossless materials; with them, −ln(0.05)/N
+    /// (95 %) while no photon of N was capped, else null (unknown). Absent from older
+    /// files (reads null).
+    pub bounce_cap_bias_bound: Option<f64>,
     /// The next-event receivers' sampled direct light: replicates per cell, their
     /// shadow rays (not in `rays_traced`) and seconds (before and during the photons).
     pub direct_replicates: u64,
@@ -152,7 +158,8 @@ pub struct ReceiverSummary {
     #[serde(deserialize_with = "null_as_nan::vec")]
     pub dof: Vec<f64>,
     pub status: Vec<CellStatus>,
-    /// A dark cell's 95 % upper bound on its value (null for the other cells).
+    /// A dark or unreliable cell's (about) 95 % upper bound on its value (null for the
+    /// other cells).
     #[serde(deserialize_with = "null_as_nan::vec")]
     pub upper_bound: Vec<f64>,
     pub unreliable_cells: usize,
@@ -212,6 +219,17 @@ pub fn build(state: &RunState<'_>) -> Summary {
             0.0
         }
     };
+    let global = global(state);
+    let cap_bound = bounce_cap_bias_bound(
+        state.setup.bounce_cap_a_priori,
+        t.killed_by_bounce_cap,
+        t.photons,
+    );
+    // The cap's bound is judged against the relative σ of the target and of the scene
+    // map's mean.
+    let global_sigma_rel = global.mean_sigma_lx / global.mean_illuminance_lx;
+    let target_sigma_rel =
+        crate::run::target_error(scene, state.target, t, state.setup.total_flux_lm, false);
     Summary {
         scene: scene.name.clone(),
         backend: state.options.backend.name().to_string(),
@@ -239,6 +257,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
         absolute_error: state.options.stop.absolute,
         bounce_cap: state.setup.bounce_cap,
         photons_killed_by_bounce_cap: t.killed_by_bounce_cap,
+        bounce_cap_bias_bound: cap_bound,
         direct_rays: t.direct_rays,
         direct_s: state.direct_s,
         stats_s: state.stats_s,
@@ -246,8 +265,9 @@ pub fn build(state: &RunState<'_>) -> Summary {
         merge_share: share(state.merge_s),
         stats_share: share(state.stats_s),
         receivers,
-        global: global(state),
-        reliability: reliability(state.history, target_vov(state)),
+        reliability: reliability(state.history, target_vov(state))
+            .with_bounce_cap(cap_bound, &[target_sigma_rel, global_sigma_rel]),
+        global,
         history: state.history.to_vec(),
         target_unreachable: crate::run::target_unreachable(
             scene,

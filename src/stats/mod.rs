@@ -40,13 +40,15 @@ pub fn cell_value(c: &CellSums, counts: Counts) -> (f64, f64) {
     if c.hits == 0 {
         return (0.0, if counts.dark { 0.0 } else { f64::NAN });
     }
-    (p.value + direct_value, (p.var + direct_var).sqrt())
+    let unit = counts.unit;
+    ((p.value + direct_value) * unit, (p.var + direct_var).sqrt() * unit)
 }
 
-/// The photons' part of a cell, in the receiver's unit: value Σx/N, its own variance
-/// estimate (eq. 7 squared) and the standard deviation of that variance estimate,
-/// sqrt(M₄)/N² (M₄ the fourth central moment sum; nearly all histories score 0 or once,
-/// so the terms of M₂ are the scores' squares).
+/// The photons' part of a cell, in the score unit (variances in it stay finite where
+/// those in the receiver's unit would not): value Σx/N, its own variance estimate (eq. 7
+/// squared) and the standard deviation of that variance estimate, sqrt(M₄)/N² (M₄ the
+/// fourth central moment sum; nearly all histories score 0 or once, so the terms of M₂
+/// are the scores' squares).
 #[derive(Clone, Copy, Debug, Default)]
 struct PhotonPart {
     value: f64,
@@ -57,33 +59,28 @@ struct PhotonPart {
 fn photon_part(c: &CellSums, counts: Counts) -> PhotonPart {
     let m = c.photons.over(counts.photons);
     let (value, var) = m.mean_and_variance();
-    let unit = counts.unit;
     if !(var >= 0.0) {
         return PhotonPart {
-            value: value * unit,
+            value,
             ..PhotonPart::default()
         };
     }
     let n = counts.photons as f64;
     PhotonPart {
-        value: value * unit,
-        var: var * unit * unit,
-        var_sd: m.m4.max(0.0).sqrt() / (n * n) * unit * unit,
+        value,
+        var,
+        var_sd: m.m4.max(0.0).sqrt() / (n * n),
     }
 }
 
 /// The direct light's part of a cell: value and variance over its replicates, in the
-/// receiver's unit.
+/// score unit.
 fn direct_part(c: &CellSums, counts: Counts) -> (f64, f64) {
     if counts.direct_replicates == 0 {
         return (0.0, 0.0);
     }
     let (value, var) = c.direct.over(counts.direct_replicates).mean_and_variance();
-    let unit = counts.unit;
-    (
-        value * unit,
-        if var >= 0.0 { var * unit * unit } else { 0.0 },
-    )
+    (value, if var >= 0.0 { var } else { 0.0 })
 }
 
 /// The sampled direct part of a cell and its σ, in the receiver's unit ((0, 0) for a
@@ -329,16 +326,14 @@ impl CellStatus {
 /// over its two independent parts: the photons' (variance `var_p` from about n_p − 1
 /// degrees of freedom, n_p the effective number of scoring histories (Σx)²/Σx²) and the
 /// direct light's (`var_d`, n_d the effective replicates). A cell whose σ rests on a
-/// handful of scores has few, whatever its σ says; infinite for a cell whose variance is
-/// 0 (an exactly known value).
+/// handful of scores has few, whatever its σ says. A cell whose samples are all equal
+/// (variance 0) has its sample count less one.
 pub fn cell_dof(c: &CellSums, counts: Counts, var_p: f64, var_d: f64) -> f64 {
+    // A part of a single effective sample counts as one degree of freedom: its share of
+    // the variance then decides, not a vanishing n − 1.
     let term = |var: f64, n: f64| {
         if var > 0.0 {
-            if n > 1.0 {
-                var * var / (n - 1.0)
-            } else {
-                f64::INFINITY
-            }
+            var * var / (n - 1.0).max(1.0)
         } else {
             0.0
         }
@@ -352,20 +347,96 @@ pub fn cell_dof(c: &CellSums, counts: Counts, var_p: f64, var_d: f64) -> f64 {
     } else if var > 0.0 {
         0.0
     } else {
-        f64::INFINITY
+        (n_p + n_d - 1.0).max(0.0)
     }
 }
 
-/// Upper bound (95 %, in the receiver's unit) on the value of a cell nothing reached in
-/// `counts`' histories and replicates, from the largest score any cell of its receiver
-/// drew, `max_score` and `max_replicate` (score unit): no score in N histories bounds
-/// the chance that a history scores there by 3/N (Poisson, zero events), so its value by
-/// 3/N times the largest score a history leaves in a cell of the receiver; the same for
-/// the direct light's replicates. It assumes the dark cell could draw no larger a score
-/// than the receiver's cells did.
-pub fn dark_upper_bound(counts: Counts, max_score: f64, max_replicate: f64) -> f64 {
-    let part = |n: u64, max: f64| if n > 0 { 3.0 / n as f64 * max } else { 0.0 };
-    (part(counts.photons, max_score) + part(counts.direct_replicates, max_replicate)) * counts.unit
+/// 95 % upper bound of the mean of a Poisson count observed to be `k`: −ln 0.05 ≈ 3
+/// for k = 0, Gehrels' (1986) approximation with S = 1.645 above (within 1 % of the
+/// exact bound).
+pub fn poisson_upper_95(k: f64) -> f64 {
+    if k <= 0.0 {
+        -(0.05f64.ln())
+    } else {
+        const S: f64 = 1.645;
+        k + S * (k + 0.75).sqrt() + (S * S + 3.0) / 4.0
+    }
+}
+
+/// One-sided 95 % quantile of Student's t with `dof` degrees of freedom (at least 1): a
+/// table to 10, the Cornish–Fisher expansion above (within 10⁻³ there).
+pub fn student_t_95(dof: f64) -> f64 {
+    const TABLE: [f64; 10] = [
+        6.314, 2.920, 2.353, 2.132, 2.015, 1.943, 1.895, 1.860, 1.833, 1.812,
+    ];
+    let dof = dof.max(1.0);
+    if dof < 10.0 {
+        return TABLE[dof.floor() as usize - 1];
+    }
+    let z = 1.644_853_626_951_472_2_f64;
+    let (z3, z5) = (z.powi(3), z.powi(5));
+    z + (z3 + z) / (4.0 * dof) + (5.0 * z5 + 16.0 * z3 + 3.0 * z) / (96.0 * dof * dof)
+}
+
+/// Upper bound (about 95 %, in the receiver's unit) on the value of a dark cell, one
+/// nothing reached in `counts`' histories and replicates. No score in N histories
+/// bounds the chance that a history scores there by 3/N (Poisson, zero events), so its
+/// photons' part by 3/N times the score a history leaves in a typical cell of its
+/// receiver; no unoccluded sample among the R replicates' S samples each bounds the
+/// share of its direct light's samples that see a light by 3/(S·R), so its direct part
+/// by 3/(S·R) times a typical cell's replicate mean (the mean weight of a sample that
+/// sees a light). `typical` = (score per scoring history, replicate mean over S) in the
+/// score unit ([`typical_scores`]); it assumes the dark cell, if it were reached, would
+/// be reached like a typical cell.
+pub fn dark_upper_bound(counts: Counts, typical: (f64, f64)) -> f64 {
+    let photons = if counts.photons > 0 {
+        3.0 / counts.photons as f64 * typical.0
+    } else {
+        0.0
+    };
+    let direct = if counts.direct_replicates > 0 {
+        3.0 / counts.direct_replicates as f64 * typical.1
+    } else {
+        0.0
+    };
+    (photons + direct) * counts.unit
+}
+
+/// The σ an unreliable cell is judged by: its own σ, which it cannot vouch for, widened
+/// by Student's t on its degrees of freedom ν ([`cell_dof`]) against the normal's
+/// quantile, t₀.₉₅(ν)/z₀.₉₅, and by 1 + √VOV (√VOV is the relative spread of σ² itself).
+pub fn widened_sigma(sigma: f64, vov: f64, dof: f64) -> f64 {
+    sigma * student_t_95(dof) / 1.644_853_626_951_472_2 * (1.0 + vov.sqrt())
+}
+
+/// Upper bound (about 95 %) on the value of an unreliable cell: value + 1.645 times its
+/// [`widened_sigma`].
+pub fn unreliable_upper_bound(value: f64, sigma: f64, vov: f64, dof: f64) -> f64 {
+    value + 1.644_853_626_951_472_2 * widened_sigma(sigma, vov, dof)
+}
+
+/// What a history and a replicate leave in a typical cell of a receiver, in the score
+/// unit: the medians over the cells that scored of the mean score per scoring history
+/// (Σx/k) and of the direct light's replicate mean over S, the samples of a replicate
+/// (what one unoccluded sample adds): what bounds a dark cell, [`dark_upper_bound`].
+fn typical_scores(cells: &[CellSums], counts: Counts) -> (f64, f64) {
+    let median = |mut x: Vec<f64>| {
+        if x.is_empty() {
+            return 0.0;
+        }
+        let mid = x.len() / 2;
+        *x.select_nth_unstable_by(mid, f64::total_cmp).1
+    };
+    let samples = crate::trace::direct::points_per_side(cells.len()).pow(2) as f64;
+    let per_history = (cells.iter())
+        .filter(|c| c.scoring_histories > 0)
+        .map(|c| c.photons.sum() / c.scoring_histories as f64)
+        .collect();
+    let per_sample = (cells.iter())
+        .map(|c| c.direct.over(counts.direct_replicates).mean / samples)
+        .filter(|&y| y > 0.0)
+        .collect();
+    (median(per_history), median(per_sample))
 }
 
 /// Values, errors and hits of one receiver.
@@ -382,7 +453,8 @@ pub struct ReceiverStats {
     /// Each cell's effective degrees of freedom ([`cell_dof`]; 0 where nothing scored).
     pub dof: Vec<f64>,
     pub status: Vec<CellStatus>,
-    /// Upper bound of each dark cell's value (NaN for the others).
+    /// Upper bound of each dark or unreliable cell's value ([`dark_upper_bound`],
+    /// [`unreliable_upper_bound`]; NaN for the others).
     pub upper_bound: Vec<f64>,
     pub mean: f64,
     /// Eq. 9 over all cells: NaN while some cell's error is unknown.
@@ -393,14 +465,18 @@ pub struct ReceiverStats {
     pub unknown_cells: usize,
     pub unreliable_cells: usize,
     pub dark_cells: usize,
-    /// Largest upper bound of a dark cell (0 without dark cells).
+    /// Largest upper bound of a dark cell (0 without).
     pub dark_bound: f64,
     /// RMS σ over the cells (eq. 9's numerator), in the receiver's unit; NaN while some
     /// cell's error is unknown.
     pub rms_sigma: f64,
-    /// RMS σ and quadratic mean value over the cells whose error is known.
-    pub rms_sigma_known: f64,
-    pub quadratic_mean_known: f64,
+    /// The σ a target judges each cell by: its σ if reliable, [`widened_sigma`] if
+    /// unreliable, NaN for dark and unknown cells; eq. 9 (quadratic), the RMS σ and the
+    /// quadratic mean value over the cells it is known for.
+    pub judged_sigma: Vec<f64>,
+    pub rel_error_judged: f64,
+    pub rms_sigma_judged: f64,
+    pub quadratic_mean_judged: f64,
 }
 
 /// Per-cell values and σ of a receiver's cells `cells`, a grid of `shape` = [nu, nv]
@@ -412,7 +488,8 @@ pub fn cell_values(cells: &[CellSums], shape: [u32; 2], counts: Counts) -> (Vec<
     (values, sigmas)
 }
 
-/// [`cell_values`], with each cell's photon and direct variances as reported.
+/// [`cell_values`], with each cell's photon and direct variances as reported (in the
+/// score unit).
 fn cell_values_and_parts(
     cells: &[CellSums],
     shape: [u32; 2],
@@ -443,8 +520,8 @@ fn cell_values_and_parts(
             let (direct_value, direct_var) = direct_part(c, counts);
             let photon_var = pooled_variance(p.var, p.var_sd, pooled);
             (
-                p.value + direct_value,
-                (photon_var + direct_var).sqrt(),
+                (p.value + direct_value) * counts.unit,
+                (photon_var + direct_var).sqrt() * counts.unit,
                 (photon_var, direct_var),
             )
         })
@@ -475,11 +552,8 @@ pub fn receiver_stats(
         None => (0..cells.len()).collect(),
         Some(picked) => picked.to_vec(),
     };
-    let (max_score, max_replicate) = cells.iter().fold((0.0f64, 0.0f64), |(a, b), c| {
-        (a.max(c.photons.max), b.max(c.direct.max))
-    });
+    let typical = typical_scores(cells, counts);
     let receiver_scored = cells.iter().any(|c| c.hits > 0);
-    let bound = dark_upper_bound(counts, max_score, max_replicate);
     let mut s = ReceiverStats::default();
     for &k in &indices {
         let c = &cells[k];
@@ -510,23 +584,45 @@ pub fn receiver_stats(
             CellStatus::Unknown
         };
         s.status.push(status);
-        s.upper_bound.push(if status == CellStatus::Dark {
-            bound
-        } else {
-            f64::NAN
+        s.upper_bound.push(match status {
+            CellStatus::Dark => dark_upper_bound(counts, typical),
+            CellStatus::Unreliable => unreliable_upper_bound(values[k], sigmas[k], vov, dof),
+            _ => f64::NAN,
         });
     }
-    let pairs = || s.values.iter().copied().zip(s.sigma.iter().copied());
-    (s.mean, s.rel_error, s.rms_sigma, _) = mean_error_of(pairs());
+    // Eq. 9 in the score unit (exact: a power of two), where squares stay finite.
+    let unit = counts.unit;
+    let pairs = || (s.values.iter().zip(&s.sigma)).map(|(v, sigma)| (v / unit, sigma / unit));
+    let all = mean_error_of(pairs());
+    (s.mean, s.rel_error, s.rms_sigma) = (all.0 * unit, all.1, all.2 * unit);
     let known = mean_error_of(pairs().filter(|(_, sigma)| !sigma.is_nan()));
     s.rel_error_known = known.1;
-    s.rms_sigma_known = known.2;
-    s.quadratic_mean_known = known.3;
+    // The lit cells with the σ a target judges them by: widened where unreliable.
+    s.judged_sigma = (0..s.values.len())
+        .map(|k| match s.status[k] {
+            CellStatus::Unreliable => widened_sigma(s.sigma[k], s.vov[k], s.dof[k]),
+            CellStatus::Reliable => s.sigma[k],
+            _ => f64::NAN,
+        })
+        .collect();
+    let judged = (s.values.iter().zip(&s.judged_sigma))
+        .filter(|(_, sigma)| !sigma.is_nan())
+        .map(|(v, sigma)| (v / unit, sigma / unit));
+    let judged = mean_error_of(judged);
+    s.rel_error_judged = judged.1.quadratic;
+    s.rms_sigma_judged = judged.2 * unit;
+    s.quadratic_mean_judged = judged.3 * unit;
     s.unknown_cells = s.sigma.iter().filter(|sigma| sigma.is_nan()).count();
     let count = |status| s.status.iter().filter(|&&x| x == status).count();
     s.unreliable_cells = count(CellStatus::Unreliable);
     s.dark_cells = count(CellStatus::Dark);
-    s.dark_bound = if s.dark_cells > 0 { bound } else { 0.0 };
+    let largest = |status| {
+        (s.upper_bound.iter().zip(&s.status))
+            .filter(|(_, &x)| x == status)
+            .map(|(b, _)| *b)
+            .fold(0.0, f64::max)
+    };
+    s.dark_bound = largest(CellStatus::Dark);
     s
 }
 
@@ -711,7 +807,10 @@ pub fn map_stats(t: &Tallies, kind: MapKind, g: &Geometry, total_flux_lm: f64) -
             ..MapStats::default()
         };
     }
-    // One pass over the counts: flux per photon of all photons, of odd and of even ones.
+    // One pass over the counts: flux per photon of all photons, of odd and of even ones,
+    // in the score unit (a power of two: exact), where the squares below stay finite.
+    let unit = t.score_unit;
+    let total_flux_lm = total_flux_lm / unit;
     let per_photon = total_flux_lm / t.photons as f64;
     let per_odd = if n_odd > 0 {
         total_flux_lm / n_odd as f64
@@ -736,10 +835,10 @@ pub fn map_stats(t: &Tallies, kind: MapKind, g: &Geometry, total_flux_lm: f64) -
         let d = (per_odd * odd as f64 - per_even * even as f64) / a;
         sum_d2 += a * d * d;
     }
-    let mean_lx = sum_e / total_area;
-    let quadratic_lx = (sum_e2 / total_area).sqrt();
+    let mean_lx = sum_e / total_area * unit;
+    let quadratic_lx = (sum_e2 / total_area).sqrt() * unit;
     let sigma_lx = if n_odd > 0 && n_even > 0 {
-        0.5 * (sum_d2 / total_area).sqrt()
+        0.5 * (sum_d2 / total_area).sqrt() * unit
     } else {
         0.0
     };
@@ -802,8 +901,33 @@ pub struct Reliability {
     /// scene mean for `global`).
     #[serde(deserialize_with = "null_as_nan::f64")]
     pub vov: f64,
-    /// The error can be trusted: FOM stable and VOV < 0.1.
+    /// The bounce cap's bias bound (`bounce_cap_bias_bound`) is unknown, or not below
+    /// [`BOUNCE_CAP_BIAS_SHARE`] of the σ_rel of the target or of the scene map: the
+    /// error is then not reliable, whatever the FOM and VOV say.
+    #[serde(default)]
+    pub bounce_cap_biased: bool,
+    /// The error can be trusted: FOM stable, VOV < 0.1 and the bounce cap's bias bound
+    /// below 1 % of the σ.
     pub reliable: bool,
+}
+
+/// The share of a figure's σ_rel the bounce cap's bias bound must stay below.
+pub const BOUNCE_CAP_BIAS_SHARE: f64 = 0.01;
+
+impl Reliability {
+    /// Judges the bounce cap's bias bound `bound` (`None`: unknown) against the σ_rel of
+    /// the figures reported: unreliable unless it is below [`BOUNCE_CAP_BIAS_SHARE`] of
+    /// each (a bound of 0 passes; a σ_rel that is 0 or unknown gives nothing to compare).
+    pub fn with_bounce_cap(mut self, bound: Option<f64>, sigma_rel: &[f64]) -> Reliability {
+        let below = |b: f64| {
+            (sigma_rel.iter())
+                .filter(|s| s.is_finite() && **s > 0.0)
+                .all(|s| b == 0.0 || b < BOUNCE_CAP_BIAS_SHARE * s)
+        };
+        self.bounce_cap_biased = !bound.is_some_and(below);
+        self.reliable &= !self.bounce_cap_biased;
+        self
+    }
 }
 
 /// Judges the history of (elapsed, photons, error) of a target and its VOV.
@@ -825,6 +949,7 @@ pub fn reliability(history: &[forecast::HistoryPoint], vov: f64) -> Reliability 
         fom,
         fom_stable,
         vov,
+        bounce_cap_biased: false,
         reliable: fom_stable && vov < 0.1,
     }
 }

@@ -2,7 +2,7 @@
 //! per epoch; the first one met ends the run.
 
 use super::forecast::{Forecast, HistoryPoint};
-use super::{receiver_stats, relative_error, CellStatus};
+use super::{receiver_stats, relative_error};
 use crate::scene::Receiver;
 use crate::tally::{CellSums, Counts};
 use crate::{Error, Result};
@@ -125,12 +125,13 @@ impl Target {
 
 /// The target's current error for a receiver target: relative (eq. 9 quadratic for a
 /// whole receiver, the worst cell's σ_rel for a block) or absolute (RMS σ, or the worst
-/// cell's σ, in the receiver's unit), over the cells that carry light. Dark cells
-/// ([`CellStatus::Dark`]) count by their upper bound: the error is at least the largest
-/// dark bound (relative to the quadratic mean of the lit cells), so a target is met only
-/// once nothing the dark cells may hold could change the answer by more than it.
-/// Infinite while a cell it covers is unknown (nothing scored on the whole receiver) or
-/// unreliable (too few samples behind its σ): such a target is never converged.
+/// cell's σ, in the receiver's unit), over the cells that carry light, each by the σ it
+/// can vouch for ([`ReceiverStats::judged_sigma`](super::ReceiverStats): an unreliable
+/// cell's σ widened by Student's t on its degrees of freedom and by its VOV). Dark cells
+/// ([`super::CellStatus::Dark`]) count by their upper bound: the error is at least the largest
+/// one (relative to the quadratic mean of the lit cells), so a target is met only once
+/// whatever they may hold could not change the answer by more than it. Infinite while
+/// a cell it covers is unknown (nothing scored on the whole receiver).
 pub fn receiver_target_error(
     target: &Target,
     receivers: &[Receiver],
@@ -146,24 +147,17 @@ pub fn receiver_target_error(
         _ => Some(target.cells(receivers)),
     };
     let stats = receiver_stats(cells, receivers[index].cells, counts, picked.as_deref());
-    let blocked = stats.unknown_cells > stats.dark_cells || stats.unreliable_cells > 0;
-    if stats.values.is_empty() || blocked || stats.dark_cells == stats.values.len() {
+    let lit = || {
+        (stats.values.iter().zip(&stats.judged_sigma)).filter(|(_, sigma)| !sigma.is_nan())
+    };
+    if stats.unknown_cells > stats.dark_cells || lit().next().is_none() {
         return f64::INFINITY;
     }
-    let lit = || {
-        stats
-            .values
-            .iter()
-            .zip(&stats.sigma)
-            .zip(&stats.status)
-            .filter(|(_, &status)| status != CellStatus::Dark)
-            .map(|(pair, _)| pair)
-    };
-    let dark_bound = stats.dark_bound;
+    let bound = stats.dark_bound;
     // The dark cells' bound as an error (0 without dark cells).
     let relative_bound = |mean: f64| {
         if stats.dark_cells > 0 {
-            relative_error(mean, dark_bound)
+            relative_error(mean, bound)
         } else {
             0.0
         }
@@ -171,17 +165,15 @@ pub fn receiver_target_error(
     match (target, absolute) {
         (Target::Block { .. }, false) => {
             let (sum, n) = lit().fold((0.0, 0usize), |(s, n), (v, _)| (s + v, n + 1));
-            let mean = sum / n as f64;
             lit()
                 .map(|(v, s)| relative_error(*v, *s))
-                .fold(relative_bound(mean), f64::max)
+                .fold(relative_bound(sum / n as f64), f64::max)
         }
-        (Target::Block { .. }, true) => lit().map(|(_, s)| *s).fold(dark_bound, f64::max),
+        (Target::Block { .. }, true) => lit().map(|(_, s)| *s).fold(bound, f64::max),
         (_, false) => stats
-            .rel_error_known
-            .quadratic
-            .max(relative_bound(stats.quadratic_mean_known)),
-        (_, true) => stats.rms_sigma_known.max(dark_bound),
+            .rel_error_judged
+            .max(relative_bound(stats.quadratic_mean_judged)),
+        (_, true) => stats.rms_sigma_judged.max(bound),
     }
 }
 

@@ -21,8 +21,10 @@ pub struct ChunkTally {
     /// Photons stopped by the bounce cap.
     pub killed_by_bounce_cap: u64,
     /// Σk, Σk², Σk³, Σk⁴ of k, the surface hits of each photon history: the moments of
-    /// the whole map's total, for the error of the scene's mean illuminance.
-    pub history_hits: [u64; 4],
+    /// the whole map's total, for the error of the scene's mean illuminance. u128: k⁴
+    /// alone passes u64 beyond 65,536 hits, and a chunk's Σk⁴ long before; with k ≤
+    /// `trace::MAX_BOUNCE_CAP` + 1 no sum of a run can pass u128 (see there).
+    pub history_hits: [u128; 4],
 }
 
 impl ChunkTally {
@@ -52,7 +54,7 @@ impl ChunkTally {
     /// after `hits` surface hits.
     #[inline]
     pub fn record_histories(&mut self, hits: u32, count: u64) {
-        let k = hits as u64;
+        let (k, count) = (hits as u128, count as u128);
         let k2 = k * k;
         let h = &mut self.history_hits;
         h[0] += count * k;
@@ -553,7 +555,7 @@ impl Tallies {
         self.rays += chunk.rays;
         self.killed_by_bounce_cap += chunk.killed_by_bounce_cap;
         for (total, part) in self.history_hits.iter_mut().zip(chunk.history_hits) {
-            *total += part as u128;
+            *total += part;
         }
         self.triangle_hits.increment_each(&chunk.deposits);
         for p in &chunk.scores {
@@ -675,6 +677,37 @@ mod tests {
         assert!(unit.is_finite() && (flux / unit) > 0.7 && (flux / unit) < 1.5);
         assert_eq!(unit.log2().fract(), 0.0);
         assert!(score_unit(1e-300) > 0.0);
+    }
+
+    #[test]
+    fn history_hit_moments_are_exact_at_a_hundred_thousand_bounces() {
+        // k⁴ = 10²⁰ > u64::MAX already for one history; seven histories of 100,000 hits
+        // (one recorded as a count of 4, as the photon pass records them) and one of 3.
+        let mut c = ChunkTally::default();
+        c.record_history_hits(100_000);
+        c.record_histories(100_000, 4);
+        c.record_history_hits(3);
+        c.record_histories(100_000, 2);
+        c.record_histories(7, 0);
+        let k = 100_000u128;
+        let exact = [
+            7 * k + 3,
+            7 * k * k + 9,
+            7 * k.pow(3) + 27,
+            7 * k.pow(4) + 81,
+        ];
+        assert_eq!(c.history_hits, exact);
+        assert_eq!(exact[3], 700_000_000_000_000_000_081);
+        // Carried exactly into the run's tallies, chunk after chunk.
+        let mut t = Tallies::new(0, 0, 1.0);
+        t.accumulate(&c, 8);
+        t.accumulate(&c, 8);
+        assert_eq!(t.history_hits, exact.map(|m| 2 * m));
+        // At the largest cap the terms stay exact too.
+        let mut d = ChunkTally::default();
+        let big = crate::trace::MAX_BOUNCE_CAP + 1;
+        d.record_histories(big, 4096);
+        assert_eq!(d.history_hits[3], 4096 * (big as u128).pow(4));
     }
 
     #[test]
