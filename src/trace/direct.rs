@@ -463,8 +463,9 @@ fn shuffle(out: &mut Vec<u32>, n: u32, rng: &mut Pcg32) {
 /// per photon, ρ, chosen to minimise the time to a given error of the next-event
 /// receivers (σ² = a/R + b/N at costs c_d·R + c_p·N rays is lowest at
 /// R/N = sqrt(a·c_p / (b·c_d))), re-estimated only at photon counts every run passes
-/// through (`CHUNK_PHOTONS`·2^k: epochs are cut there), so the replicate count, like
-/// every tally, depends on the photon count alone.
+/// through (`CHUNK_PHOTONS`·2^k: epochs are cut there), where [`replicate_floor`] may
+/// also add replicates, so the replicate count, like every tally, depends on the photon
+/// count alone.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DirectSchedule {
     /// Replicates per photon.
@@ -507,6 +508,36 @@ impl DirectSchedule {
             },
         }
     }
+}
+
+/// The direct light's floor ([`replicate_floor`]): at every schedule point each lit
+/// cell is given at least this many effective replicates (Σy)²/Σy². Below about 10 a
+/// cell whose replicates are skewed (few of its points see light: a cone's or a
+/// shadow's edge) reads low with too small a σ (docs/method.md, "Cells few photons
+/// reach"); a smooth cell has about as many as its replicates, so the pilot's 16
+/// already give it more and the floor adds none.
+pub const FLOOR_EFFECTIVE: f64 = 10.0;
+
+/// The floor never asks for more than this many replicates, 4 × the pilot's: it costs
+/// at most 3 pilots more, once in a run, whatever the photons. A cell that would need
+/// more (a light's sliver that one replicate in 16 sees) gets these.
+pub const FLOOR_MAX: u64 = 4 * PILOT_REPLICATES;
+
+/// The replicates at which every lit cell of `cells` (`replicates` of them so far) has
+/// [`FLOOR_EFFECTIVE`] effective replicates (Σy)²/Σy², each further replicate adding
+/// as many as the cell's replicates so far did on average; at most [`FLOOR_MAX`]. Read
+/// from the tallies at a schedule point, like the schedule itself, so the replicates
+/// stay a function of the photon count (their values decide how many are drawn, never
+/// which, so each stays unbiased).
+pub fn replicate_floor(cells: &[CellSums], replicates: u64) -> u64 {
+    let mut floor = 0.0f64;
+    for c in cells {
+        let effective = c.direct.over(replicates).effective_count();
+        if effective > 0.0 {
+            floor = floor.max(FLOOR_EFFECTIVE * replicates as f64 / effective);
+        }
+    }
+    (floor.ceil() as u64).min(FLOOR_MAX)
 }
 
 /// Σ over cells of the relative variances of one direct replicate (a) and of one photon
@@ -556,5 +587,34 @@ mod tests {
         assert!((s.per_photon - 4.0).abs() < 1e-12);
         assert_eq!(s.wanted(1000, 3), 4000);
         assert_eq!(s.wanted(1, 16), 16, "never fewer than done");
+    }
+
+    /// Cells whose replicates are `values` (in order).
+    fn cells(values: &[&[f64]]) -> Vec<CellSums> {
+        values
+            .iter()
+            .map(|ys| {
+                let mut c = CellSums::default();
+                ys.iter().for_each(|&y| c.add_direct(y));
+                c
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_floor_gives_skewed_cells_ten_effective_replicates_and_smooth_ones_nothing() {
+        // 16 equal replicates: 16 effective, more than the floor's 10 (11 replicates).
+        let smooth = [1.0; 16];
+        assert!(replicate_floor(&cells(&[&smooth]), 16) < 16);
+        // 4 of 16 replicates saw light, equally: 4 effective, 2.5 times too few.
+        let mut skewed = [0.0; 16];
+        skewed[..4].fill(1.0);
+        assert_eq!(replicate_floor(&cells(&[&smooth, &skewed]), 16), 40);
+        // One of 16: 160 wanted, the floor's most given.
+        let mut sliver = [0.0; 16];
+        sliver[3] = 1.0;
+        assert_eq!(replicate_floor(&cells(&[&sliver, &skewed]), 16), FLOOR_MAX);
+        // Unlit cells ask for nothing.
+        assert_eq!(replicate_floor(&cells(&[&[0.0; 16]]), 16), 0);
     }
 }
