@@ -9,7 +9,9 @@ use crate::stats::forecast::{forecast, Forecast, HistoryPoint};
 use crate::stats::stop::{min_hits, receiver_target_error, unreachable, StopReason, Target};
 use crate::stats::{map_stats, MapKind};
 use crate::tally::{ChunkTally, Tallies};
-use crate::trace::direct::{relative_variances, replicate_floor, DirectSchedule, PILOT_REPLICATES};
+use crate::trace::direct::{
+    relative_variances, replicate_floor, samples_per_replicate, DirectSchedule, PILOT_REPLICATES,
+};
 use crate::trace::{Scratch, Tracer, CHUNK_PHOTONS};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -348,24 +350,27 @@ impl<'s> Engine<'s> {
     }
 
     /// The direct light's replicates per photon and its floor (replicates), from the
-    /// tallies at a schedule point.
+    /// tallies at a schedule point. A replicate's cost is its samples plus its shadow
+    /// rays so far on average, a photon's its rays.
     fn schedule_direct(&self, tallies: &Tallies) -> (DirectSchedule, u64) {
-        let (mut a, mut b, mut floor) = (0.0, 0.0, 0);
-        for grid in self
+        let (mut a, mut b, mut samples, mut floor) = (0.0, 0.0, 0, 0);
+        for (grid, sides) in self
             .tracer
             .receivers
             .iter()
             .filter(|g| g.estimator.direct_by_replicates())
+            .zip(self.direct_sides())
         {
             let cells = &tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
             let (ga, gb) = relative_variances(cells, tallies.photons, tallies.direct_replicates);
             (a, b) = (a + ga, b + gb);
+            samples += samples_per_replicate(sides);
             floor = floor.max(replicate_floor(cells, tallies.direct_replicates));
         }
         let schedule = DirectSchedule::from_variances(
             a,
             b,
-            tallies.direct_rays as f64 / tallies.direct_replicates.max(1) as f64,
+            samples as f64 + tallies.direct_rays as f64 / tallies.direct_replicates.max(1) as f64,
             tallies.rays as f64 / tallies.photons.max(1) as f64,
         );
         (schedule, floor)
