@@ -9,7 +9,9 @@ use crate::stats::forecast::{forecast, Forecast, HistoryPoint};
 use crate::stats::stop::{min_hits, receiver_target_error, unreachable, StopReason, Target};
 use crate::stats::{map_stats, MapKind};
 use crate::tally::{ChunkTally, Tallies};
-use crate::trace::direct::{relative_variances, DirectSchedule, PILOT_REPLICATES};
+use crate::trace::direct::{
+    relative_variances, replicate_floor, samples_per_replicate, DirectSchedule, PILOT_REPLICATES,
+};
 use crate::trace::{Scratch, Tracer, CHUNK_PHOTONS};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -289,10 +291,11 @@ impl<'s> Engine<'s> {
 
     /// The direct light after the photons reached `tallies.photons`: at a schedule
     /// point (`CHUNK_PHOTONS`·2^k) first the replicates the old schedule wants there,
-    /// then the schedule re-estimated; then the replicates it wants. The replicate count
-    /// and every sum the schedule reads are thus functions of the photon count alone,
-    /// whatever the epochs (a resumed run and a merge of shards pass through the same
-    /// states). Returns the seconds it took.
+    /// then the schedule and the floor (`direct::replicate_floor`) re-estimated from
+    /// those tallies and the floor's replicates added; then the replicates the schedule
+    /// wants. The replicate count and every sum the schedule reads are thus functions
+    /// of the photon count alone, whatever the epochs (a resumed run and a merge of
+    /// shards pass through the same states). Returns the seconds it took.
     pub(crate) fn top_up_direct(
         &self,
         tallies: &mut Tallies,
@@ -302,7 +305,9 @@ impl<'s> Engine<'s> {
         if tallies.photons.is_power_of_two() && tallies.photons >= CHUNK_PHOTONS {
             let wanted = schedule.wanted(tallies.photons, tallies.direct_replicates);
             seconds += self.add_direct(tallies, wanted);
-            *schedule = self.schedule_direct(tallies);
+            let floor;
+            (*schedule, floor) = self.schedule_direct(tallies);
+            seconds += self.add_direct(tallies, floor);
         }
         let wanted = schedule.wanted(tallies.photons, tallies.direct_replicates);
         seconds + self.add_direct(tallies, wanted)
@@ -323,11 +328,7 @@ impl<'s> Engine<'s> {
                 .iter()
                 .filter(|g| g.estimator.direct_by_replicates())
         };
-        let sides = self.direct_sides.get_or_init(|| {
-            self.pool
-                .install(|| grids().map(|g| direct.cell_sides(g)).collect())
-        });
-        for (grid, sides) in grids().zip(sides) {
+        for (grid, sides) in grids().zip(self.direct_sides()) {
             let cells = &mut tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
             tallies.direct_rays += self
                 .pool
@@ -337,25 +338,47 @@ impl<'s> Engine<'s> {
         start.elapsed().as_secs_f64()
     }
 
-    /// The direct light's replicates per photon, from the tallies at a schedule point.
-    fn schedule_direct(&self, tallies: &Tallies) -> DirectSchedule {
-        let (mut a, mut b) = (0.0, 0.0);
-        for grid in self
+    /// Per next-event receiver (in order), its cells' points per side in a direct
+    /// replicate, computed at the first call.
+    fn direct_sides(&self) -> &[Vec<u32>] {
+        self.direct_sides.get_or_init(|| {
+            let direct = self.tracer.direct_light();
+            self.pool.install(|| {
+                self.tracer
+                    .receivers
+                    .iter()
+                    .filter(|g| g.estimator.direct_by_replicates())
+                    .map(|g| direct.cell_sides(g))
+                    .collect()
+            })
+        })
+    }
+
+    /// The direct light's replicates per photon and its floor (replicates), from the
+    /// tallies at a schedule point. A replicate's cost is its samples plus its shadow
+    /// rays so far on average, a photon's its rays.
+    fn schedule_direct(&self, tallies: &Tallies) -> (DirectSchedule, u64) {
+        let (mut a, mut b, mut samples, mut floor) = (0.0, 0.0, 0, 0);
+        for (grid, sides) in self
             .tracer
             .receivers
             .iter()
             .filter(|g| g.estimator.direct_by_replicates())
+            .zip(self.direct_sides())
         {
             let cells = &tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
             let (ga, gb) = relative_variances(cells, tallies.photons, tallies.direct_replicates);
             (a, b) = (a + ga, b + gb);
+            samples += samples_per_replicate(sides);
+            floor = floor.max(replicate_floor(cells, tallies.direct_replicates));
         }
-        DirectSchedule::from_variances(
+        let schedule = DirectSchedule::from_variances(
             a,
             b,
-            tallies.direct_rays as f64 / tallies.direct_replicates.max(1) as f64,
+            samples as f64 + tallies.direct_rays as f64 / tallies.direct_replicates.max(1) as f64,
             tallies.rays as f64 / tallies.photons.max(1) as f64,
-        )
+        );
+        (schedule, floor)
     }
 }
 

@@ -459,22 +459,37 @@ fn shuffle(out: &mut Vec<u32>, n: u32, rng: &mut Pcg32) {
     }
 }
 
+/// Samples one replicate draws over a receiver whose cells take `sides` points per side
+/// ([`DirectLight::cell_sides`]): each evaluates a light (and, for an area source, draws
+/// a point of it in the solid angle it subtends), whether or not it then casts a shadow
+/// ray. Drawing the samples, not tracing their rays, is most of a replicate's time:
+/// under a narrow luminance meter 100 % of its samples are drawn and < 1 % cast a ray,
+/// and on the spot's cone-edge test tracing takes under 10 % of the direct light's time.
+pub fn samples_per_replicate(sides: &[u32]) -> u64 {
+    sides.iter().map(|&m| m as u64 * m as u64).sum()
+}
+
 /// How many direct-light replicates a run has after N photons: a number of replicates
 /// per photon, ρ, chosen to minimise the time to a given error of the next-event
-/// receivers (σ² = a/R + b/N at costs c_d·R + c_p·N rays is lowest at
-/// R/N = sqrt(a·c_p / (b·c_d))), re-estimated only at photon counts every run passes
-/// through (`CHUNK_PHOTONS`·2^k: epochs are cut there), so the replicate count, like
-/// every tally, depends on the photon count alone.
+/// receivers (σ² = a/R + b/N at costs c_d·R + c_p·N is lowest at
+/// R/N = sqrt(a·c_p / (b·c_d))), with c_d a replicate's samples plus its shadow rays
+/// and c_p a photon's rays, at most [`MAX_DIRECT_WORK_SHARE`] times the photons' work;
+/// re-estimated only at photon counts every run passes through (`CHUNK_PHOTONS`·2^k:
+/// epochs are cut there), where [`replicate_floor`] may also add replicates, so the
+/// replicate count, like every tally, depends on the photon count alone.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DirectSchedule {
     /// Replicates per photon.
     pub per_photon: f64,
 }
 
-/// At most this many direct shadow rays per photon ray: the direct light never takes
-/// more than 16/17 of a run's rays, even when photons add nothing to a receiver (a
-/// black room), and the photons still build the scene map.
-const MAX_DIRECT_RAY_SHARE: f64 = 16.0;
+/// At most this much direct work per unit of photon work (work: samples drawn plus rays
+/// cast, [`DirectSchedule::from_variances`]): the direct light never takes more than
+/// 16/17 of a run's work, even when photons add nothing to a receiver (a black room),
+/// and the photons still build the scene map. Costed by rays alone, a replicate whose
+/// samples rarely cast one (a narrow luminance meter: 1,600 samples, 7 rays) looked
+/// almost free and was drawn 2 times per photon.
+pub const MAX_DIRECT_WORK_SHARE: f64 = 16.0;
 
 impl DirectSchedule {
     /// Replicates wanted after `photons` photons (never fewer than `done`).
@@ -485,17 +500,17 @@ impl DirectSchedule {
 
     /// The ratio re-estimated from the tallies: `a`, `b` are the receivers' direct
     /// variance per replicate and photon variance per history, each relative to the
-    /// cells' values and summed over cells; `direct_rays_per_replicate` and
-    /// `rays_per_photon` the costs.
+    /// cells' values and summed over cells; `work_per_replicate` (a replicate's samples
+    /// plus its shadow rays) and `rays_per_photon` the costs.
     pub fn from_variances(
         a: f64,
         b: f64,
-        direct_rays_per_replicate: f64,
+        work_per_replicate: f64,
         rays_per_photon: f64,
     ) -> DirectSchedule {
-        let cap = MAX_DIRECT_RAY_SHARE * rays_per_photon / direct_rays_per_replicate.max(1.0);
+        let cap = MAX_DIRECT_WORK_SHARE * rays_per_photon / work_per_replicate.max(1.0);
         let optimum = if b > 0.0 {
-            (a * rays_per_photon / (b * direct_rays_per_replicate.max(1.0))).sqrt()
+            (a * rays_per_photon / (b * work_per_replicate.max(1.0))).sqrt()
         } else {
             cap
         };
@@ -507,6 +522,36 @@ impl DirectSchedule {
             },
         }
     }
+}
+
+/// The direct light's floor ([`replicate_floor`]): at every schedule point each lit
+/// cell is given at least this many effective replicates (Σy)²/Σy². Below about 10 a
+/// cell whose replicates are skewed (few of its points see light: a cone's or a
+/// shadow's edge) reads low with too small a σ (docs/method.md, "Cells few photons
+/// reach"); a smooth cell has about as many as its replicates, so the pilot's 16
+/// already give it more and the floor adds none.
+pub const FLOOR_EFFECTIVE: f64 = 10.0;
+
+/// The floor never asks for more than this many replicates, 4 × the pilot's: it costs
+/// at most 3 pilots more, once in a run, whatever the photons. A cell that would need
+/// more (a light's sliver that one replicate in 16 sees) gets these.
+pub const FLOOR_MAX: u64 = 4 * PILOT_REPLICATES;
+
+/// The replicates at which every lit cell of `cells` (`replicates` of them so far) has
+/// [`FLOOR_EFFECTIVE`] effective replicates (Σy)²/Σy², each further replicate adding
+/// as many as the cell's replicates so far did on average; at most [`FLOOR_MAX`]. Read
+/// from the tallies at a schedule point, like the schedule itself, so the replicates
+/// stay a function of the photon count (their values decide how many are drawn, never
+/// which, so each stays unbiased).
+pub fn replicate_floor(cells: &[CellSums], replicates: u64) -> u64 {
+    let mut floor = 0.0f64;
+    for c in cells {
+        let effective = c.direct.over(replicates).effective_count();
+        if effective > 0.0 {
+            floor = floor.max(FLOOR_EFFECTIVE * replicates as f64 / effective);
+        }
+    }
+    (floor.ceil() as u64).min(FLOOR_MAX)
 }
 
 /// Σ over cells of the relative variances of one direct replicate (a) and of one photon
@@ -548,13 +593,47 @@ mod tests {
 
     #[test]
     fn schedule_balances_variance_per_cost_and_caps_the_share() {
-        // Equal variances, direct replicate 4× a photon's rays: R/N = sqrt(1/4) = 1/2.
+        // Equal variances, direct replicate 4× a photon's work: R/N = sqrt(1/4) = 1/2.
         let s = DirectSchedule::from_variances(1.0, 1.0, 40.0, 10.0);
         assert!((s.per_photon - 0.5).abs() < 1e-12);
-        // Photons add nothing: the cap, 16 direct rays per photon ray.
+        // Photons add nothing: the cap, 16 units of direct work per unit of photon work.
         let s = DirectSchedule::from_variances(1.0, 0.0, 40.0, 10.0);
         assert!((s.per_photon - 4.0).abs() < 1e-12);
         assert_eq!(s.wanted(1000, 3), 4000);
         assert_eq!(s.wanted(1, 16), 16, "never fewer than done");
+    }
+
+    #[test]
+    fn samples_of_a_replicate_count_every_point_of_every_cell() {
+        assert_eq!(samples_per_replicate(&[4, 4, 8]), 16 + 16 + 64);
+    }
+
+    /// Cells whose replicates are `values` (in order).
+    fn cells(values: &[&[f64]]) -> Vec<CellSums> {
+        values
+            .iter()
+            .map(|ys| {
+                let mut c = CellSums::default();
+                ys.iter().for_each(|&y| c.add_direct(y));
+                c
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_floor_gives_skewed_cells_ten_effective_replicates_and_smooth_ones_nothing() {
+        // 16 equal replicates: 16 effective, more than the floor's 10 (11 replicates).
+        let smooth = [1.0; 16];
+        assert!(replicate_floor(&cells(&[&smooth]), 16) < 16);
+        // 4 of 16 replicates saw light, equally: 4 effective, 2.5 times too few.
+        let mut skewed = [0.0; 16];
+        skewed[..4].fill(1.0);
+        assert_eq!(replicate_floor(&cells(&[&smooth, &skewed]), 16), 40);
+        // One of 16: 160 wanted, the floor's most given.
+        let mut sliver = [0.0; 16];
+        sliver[3] = 1.0;
+        assert_eq!(replicate_floor(&cells(&[&sliver, &skewed]), 16), FLOOR_MAX);
+        // Unlit cells ask for nothing.
+        assert_eq!(replicate_floor(&cells(&[&[0.0; 16]]), 16), 0);
     }
 }
