@@ -230,6 +230,35 @@ mod tests {
     use super::*;
 
     #[test]
+    fn unreliable_cells_are_hatched_and_the_others_are_not() {
+        // Two cells of one colour, the second hatched: only its pixels carry stripes.
+        let colour = |_: usize| [10, 20, 30];
+        let png = false_colour([2, 1], &colour, &|k| k == 1, 1.0, 1.0, "lx").unwrap();
+        let img = image_of(&png);
+        let (s, top) = (128, MARGIN + 5 * GLYPH_SCALE + 6);
+        let count = |x0: usize| {
+            let mut white = 0;
+            for y in top..top + s {
+                for x in MARGIN + x0..MARGIN + x0 + s {
+                    white += (img.2[3 * (y * img.0 + x)..][..3] == HATCH) as usize;
+                }
+            }
+            white
+        };
+        assert_eq!(count(0), 0, "a reliable cell has no stripes");
+        assert!(count(s) > s * s / 4, "an unreliable cell is hatched");
+    }
+
+    /// (width, height, RGB) of an 8-bit RGB PNG.
+    fn image_of(png: &[u8]) -> (usize, usize, Vec<u8>) {
+        let decoder = png::Decoder::new(std::io::Cursor::new(png));
+        let mut reader = decoder.read_info().unwrap();
+        let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+        let info = reader.next_frame(&mut buf).unwrap();
+        (info.width as usize, info.height as usize, buf)
+    }
+
+    #[test]
     fn labels_are_short_and_round_trip_their_digits() {
         assert_eq!(format_number(0.0), "0");
         assert_eq!(format_number(312.6), "313");

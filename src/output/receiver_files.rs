@@ -13,7 +13,7 @@
 //! CSV: a header line, then one row per cell in index order j * cells[0] + i:
 //! `i,j,x_m,y_m,z_m,value,sigma,rel_error,hits,scoring_histories,vov,dof,status,upper_bound`,
 //! the cell centre in world metres and f64 numbers printed in full round-trip precision
-//! (`NaN` where unknown; `upper_bound` only for dark cells).
+//! (`NaN` where unknown; `upper_bound` only for dark and unreliable cells).
 
 use crate::output::summary::ReceiverSummary;
 use crate::scene::Receiver;

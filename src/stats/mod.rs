@@ -41,7 +41,10 @@ pub fn cell_value(c: &CellSums, counts: Counts) -> (f64, f64) {
         return (0.0, if counts.dark { 0.0 } else { f64::NAN });
     }
     let unit = counts.unit;
-    ((p.value + direct_value) * unit, (p.var + direct_var).sqrt() * unit)
+    (
+        (p.value + direct_value) * unit,
+        (p.var + direct_var).sqrt() * unit,
+    )
 }
 
 /// The photons' part of a cell, in the score unit (variances in it stay finite where

@@ -147,9 +147,8 @@ pub fn receiver_target_error(
         _ => Some(target.cells(receivers)),
     };
     let stats = receiver_stats(cells, receivers[index].cells, counts, picked.as_deref());
-    let lit = || {
-        (stats.values.iter().zip(&stats.judged_sigma)).filter(|(_, sigma)| !sigma.is_nan())
-    };
+    let lit =
+        || (stats.values.iter().zip(&stats.judged_sigma)).filter(|(_, sigma)| !sigma.is_nan());
     if stats.unknown_cells > stats.dark_cells || lit().next().is_none() {
         return f64::INFINITY;
     }
