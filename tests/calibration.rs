@@ -523,6 +523,22 @@ fn assert_tails(z: &[f64], tails: &Tails, what: &str) {
     );
 }
 
+/// The summary of one seed's run of `toml` with `estimator` (Embree, 2 threads).
+fn seed_run(
+    toml: &str,
+    photons: u64,
+    seed: u64,
+    estimator: Estimator,
+) -> luxtally::output::summary::Summary {
+    let s = scene(toml);
+    let opts = RunOptions {
+        estimator: Some(estimator),
+        seed,
+        ..options(&s, photons, 2, Backend::Embree)
+    };
+    run_options(&s, &opts)
+}
+
 /// z-scores of every cell whose error is known, over seeds 1..=`seeds`.
 fn pooled_z(
     toml: &str,
@@ -533,13 +549,7 @@ fn pooled_z(
 ) -> Vec<f64> {
     let mut z = Vec::new();
     for seed in 1..=seeds {
-        let s = scene(toml);
-        let opts = RunOptions {
-            estimator: Some(estimator),
-            seed,
-            ..options(&s, photons, 2, Backend::Embree)
-        };
-        let summary = run_options(&s, &opts);
+        let summary = seed_run(toml, photons, seed, estimator);
         let r = summary.receivers.values().next().expect("one receiver");
         let nu = r.cells[0] as usize;
         for (k, (v, sigma)) in r.values.iter().zip(&r.sigma).enumerate() {
@@ -908,13 +918,7 @@ fn reliable_z(
     use luxtally::stats::CellStatus;
     let (mut z, mut z_unreliable, mut counts) = (Vec::new(), Vec::new(), [0usize; 4]);
     for seed in seeds {
-        let s = scene(toml);
-        let opts = RunOptions {
-            estimator: Some(estimator),
-            seed,
-            ..options(&s, photons, 2, Backend::Embree)
-        };
-        let summary = run_options(&s, &opts);
+        let summary = seed_run(toml, photons, seed, estimator);
         let r = summary.receivers.values().next().expect("one receiver");
         let nu = r.cells[0] as usize;
         for (k, status) in r.status.iter().enumerate() {
