@@ -178,9 +178,9 @@ impl<'a> SavedTallies<'a> {
 }
 
 /// Cells as bytes, fast to write and small where cells are empty: per cell the hits,
-/// the scoring histories and the two moment counts (LEB128), a u16 mask of which of the
-/// 10 words (mean, M₂, M₃, M₄, max of the photons, then of the direct light) are not
-/// +0.0, and those words' bits (LE).
+/// the scoring histories and the two moment counts (LEB128), a u8 mask of which of the
+/// 8 words (mean, M₂, M₃, M₄ of the photons, then of the direct light) are not +0.0,
+/// and those words' bits (LE).
 fn pack_cells(cells: &[CellSums]) -> Vec<u8> {
     let mut out = Vec::with_capacity(cells.len() * 4);
     for c in cells {
@@ -192,13 +192,13 @@ fn pack_cells(cells: &[CellSums]) -> Vec<u8> {
             out.push(h as u8);
         }
         let words = [&c.photons, &c.direct]
-            .map(|m| [m.mean, m.m2, m.m3, m.m4, m.max].map(f64::to_bits))
+            .map(|m| [m.mean, m.m2, m.m3, m.m4].map(f64::to_bits))
             .concat();
         let mask = words
             .iter()
             .enumerate()
-            .fold(0u16, |m, (k, &w)| m | (((w != 0) as u16) << k));
-        out.extend_from_slice(&mask.to_le_bytes());
+            .fold(0u8, |m, (k, &w)| m | (((w != 0) as u8) << k));
+        out.push(mask);
         for w in words.iter().filter(|&&w| w != 0) {
             out.extend_from_slice(&w.to_le_bytes());
         }
@@ -224,9 +224,9 @@ fn unpack_cells(bytes: &[u8]) -> Option<Vec<CellSums>> {
                 shift += 7;
             }
         }
-        let mask = u16::from_le_bytes(bytes.get(at..at + 2)?.try_into().ok()?);
-        at += 2;
-        let mut words = [0f64; 10];
+        let mask = *bytes.get(at)?;
+        at += 1;
+        let mut words = [0f64; 8];
         for (k, w) in words.iter_mut().enumerate() {
             if mask & (1 << k) != 0 {
                 *w = f64::from_bits(u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?));
@@ -239,14 +239,13 @@ fn unpack_cells(bytes: &[u8]) -> Option<Vec<CellSums>> {
             m2: w[1],
             m3: w[2],
             m4: w[3],
-            max: w[4],
         };
         let [hits, scoring_histories, n_photons, n_direct] = counts;
         cells.push(CellSums {
-            photons: moments(n_photons, &words[..5]),
+            photons: moments(n_photons, &words[..4]),
             hits,
             scoring_histories,
-            direct: moments(n_direct, &words[5..]),
+            direct: moments(n_direct, &words[4..]),
         });
     }
     Some(cells)
@@ -871,8 +870,8 @@ mod tests {
     use super::*;
 
     /// Length and CRC-32 of the fixed checkpoint below, encoded by format 3.
-    const GOLDEN_LEN: usize = 141;
-    const GOLDEN_CRC: u32 = 1_149_461_879;
+    const GOLDEN_LEN: usize = 138;
+    const GOLDEN_CRC: u32 = 3_647_330_284;
 
     #[test]
     fn a_damaged_checkpoint_is_refused_in_one_line() {

@@ -581,11 +581,10 @@ impl<'r, 's> Epochs<'r, 's> {
                 self.forecast,
             )
             .is_some();
-        let reason = if unreachable {
-            Some(StopReason::Unreachable)
-        } else {
-            self.stop_reason(error, elapsed_s, interrupt)
-        };
+        // The budgets first: a run at its limit stopped on it, whatever the forecast.
+        let reason = self
+            .stop_reason(error, elapsed_s, interrupt)
+            .or(unreachable.then_some(StopReason::Unreachable));
         self.stats_s += stats_start.elapsed().as_secs_f64();
         reason
     }

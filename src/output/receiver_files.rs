@@ -101,7 +101,14 @@ pub fn receiver_csv(receiver: &Receiver, r: &ReceiverSummary) -> String {
     s
 }
 
-/// Cell `k`'s status; a summary written before statuses existed reads as reliable.
+/// Cell `k`'s status. A summary written before statuses existed has none: its cells read
+/// as reliable where their σ is known, unknown where it is not.
 pub fn status_of(r: &ReceiverSummary, k: usize) -> CellStatus {
-    r.status.get(k).copied().unwrap_or_default()
+    r.status.get(k).copied().unwrap_or_else(|| {
+        if r.sigma.get(k).is_some_and(|s| !s.is_nan()) {
+            CellStatus::Reliable
+        } else {
+            CellStatus::Unknown
+        }
+    })
 }

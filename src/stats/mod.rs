@@ -177,7 +177,8 @@ fn neighbour_median(var: &[f64], nu: usize, nv: usize, i: usize, j: usize) -> f6
 
 /// VOV of a cell's value (photon part plus direct part): the parts are independent, so
 /// the variance of its variance estimate is the sum of theirs,
-/// VOV = (VOV_p·σ_p⁴ + VOV_d·σ_d⁴)/(σ_p² + σ_d²)²; 1 when nothing is known. Invariant
+/// VOV = (VOV_p·σ_p⁴ + VOV_d·σ_d⁴)/(σ_p² + σ_d²)²; 0 for a cell whose samples are all
+/// equal, 1 when nothing is known. Invariant
 /// to the light's level (the moments are central and in the score unit).
 pub fn cell_vov(c: &CellSums, counts: Counts) -> f64 {
     let part = |m: crate::tally::Moments, n: u64| {
@@ -190,8 +191,12 @@ pub fn cell_vov(c: &CellSums, counts: Counts) -> f64 {
     let (vov_p, var_p) = part(c.photons, counts.photons);
     let (vov_d, var_d) = part(c.direct, counts.direct_replicates);
     let var = var_p + var_d;
+    let samples = c.photons.over(counts.photons).n + c.direct.over(counts.direct_replicates).n;
     if var > 0.0 {
         (vov_p * var_p * var_p + vov_d * var_d * var_d) / (var * var)
+    } else if samples >= 2 && c.hits > 0 {
+        // Equal samples (a direct light every replicate sees alike): known exactly.
+        0.0
     } else {
         1.0
     }
@@ -351,18 +356,6 @@ pub fn cell_dof(c: &CellSums, counts: Counts, var_p: f64, var_d: f64) -> f64 {
         0.0
     } else {
         (n_p + n_d - 1.0).max(0.0)
-    }
-}
-
-/// 95 % upper bound of the mean of a Poisson count observed to be `k`: −ln 0.05 ≈ 3
-/// for k = 0, Gehrels' (1986) approximation with S = 1.645 above (within 1 % of the
-/// exact bound).
-pub fn poisson_upper_95(k: f64) -> f64 {
-    if k <= 0.0 {
-        -(0.05f64.ln())
-    } else {
-        const S: f64 = 1.645;
-        k + S * (k + 0.75).sqrt() + (S * S + 3.0) / 4.0
     }
 }
 
@@ -557,22 +550,31 @@ pub fn receiver_stats(
     };
     let typical = typical_scores(cells, counts);
     let receiver_scored = cells.iter().any(|c| c.hits > 0);
+    // Each cell's VOV and degrees of freedom, in parallel as the values above.
+    let vov_dof: Vec<(f64, f64)> = {
+        use rayon::prelude::*;
+        indices
+            .par_iter()
+            .with_min_len(4096)
+            .map(|&k| {
+                let c = &cells[k];
+                if c.hits > 0 || counts.dark {
+                    let dof = cell_dof(c, counts, vars[k].0, vars[k].1);
+                    (cell_vov(c, counts), dof)
+                } else {
+                    (1.0, 0.0)
+                }
+            })
+            .collect()
+    };
     let mut s = ReceiverStats::default();
-    for &k in &indices {
+    for (&k, &(vov, dof)) in indices.iter().zip(&vov_dof) {
         let c = &cells[k];
         s.values.push(values[k]);
         s.sigma.push(sigmas[k]);
         s.hits.push(c.hits);
         s.scoring_histories.push(c.scoring_histories);
         let lit = c.hits > 0 || counts.dark;
-        let (vov, dof) = if lit {
-            (
-                cell_vov(c, counts),
-                cell_dof(c, counts, vars[k].0, vars[k].1),
-            )
-        } else {
-            (1.0, 0.0)
-        };
         s.vov.push(vov);
         s.dof.push(dof);
         let status = if lit {
@@ -619,13 +621,10 @@ pub fn receiver_stats(
     let count = |status| s.status.iter().filter(|&&x| x == status).count();
     s.unreliable_cells = count(CellStatus::Unreliable);
     s.dark_cells = count(CellStatus::Dark);
-    let largest = |status| {
-        (s.upper_bound.iter().zip(&s.status))
-            .filter(|(_, &x)| x == status)
-            .map(|(b, _)| *b)
-            .fold(0.0, f64::max)
-    };
-    s.dark_bound = largest(CellStatus::Dark);
+    s.dark_bound = (s.upper_bound.iter().zip(&s.status))
+        .filter(|(_, &x)| x == CellStatus::Dark)
+        .map(|(b, _)| *b)
+        .fold(0.0, f64::max);
     s
 }
 
@@ -1114,7 +1113,7 @@ mod tests {
             (s.unreliable_cells, s.dark_cells, s.unknown_cells),
             (1, 1, 1)
         );
-        // No score in 10⁶ histories, the largest score 1 (in units of 2): 6·10⁻⁶.
+        // No score in 10⁶ histories, a typical score per history 1 (in units of 2): 6·10⁻⁶.
         assert!((s.upper_bound[10] - 6e-6).abs() < 1e-18 && s.dark_bound == s.upper_bound[10]);
         assert!(s.upper_bound[0].is_nan() && s.sigma[10].is_nan());
         assert_eq!(s.scoring_histories[0], 40);

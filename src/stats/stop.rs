@@ -129,7 +129,8 @@ impl Target {
 /// can vouch for ([`ReceiverStats::judged_sigma`](super::ReceiverStats): an unreliable
 /// cell's σ widened by Student's t on its degrees of freedom and by its VOV). Dark cells
 /// ([`super::CellStatus::Dark`]) count by their upper bound: the error is at least the largest
-/// one (relative to the quadratic mean of the lit cells), so a target is met only once
+/// one (relative to the lit cells' mean: quadratic for a receiver, arithmetic for a
+/// block), so a target is met only once
 /// whatever they may hold could not change the answer by more than it. Infinite while
 /// a cell it covers is unknown (nothing scored on the whole receiver).
 pub fn receiver_target_error(
@@ -213,7 +214,15 @@ pub fn unreachable(
             last.photons
         ));
     }
-    let f = forecast?;
+    let Some(f) = forecast else {
+        // No forecast from finite errors: the photons needed pass what can be counted.
+        return last.rel_error.is_finite().then(|| {
+            format!(
+                "the error ({:.3e}) would need more photons than can be counted",
+                last.rel_error
+            )
+        });
+    };
     if f.photons > max_photons {
         return Some(format!(
             "the forecast needs {} photons, more than the {max_photons} allowed",

@@ -100,8 +100,6 @@ pub struct Moments {
     pub m2: f64,
     pub m3: f64,
     pub m4: f64,
-    /// The largest score (0 for none): what bounds a cell no history has reached.
-    pub max: f64,
 }
 
 impl Moments {
@@ -111,7 +109,6 @@ impl Moments {
         self.merge(&Moments {
             n: 1,
             mean: x,
-            max: x,
             ..Moments::default()
         });
     }
@@ -142,7 +139,6 @@ impl Moments {
         let d_n2 = d_n * d_n;
         let term = delta * d_n * na * nb;
         let a = *self;
-        self.max = a.max.max(b.max);
         self.n += b.n;
         // Anchored at the larger set: a few scores merged with many zeros would lose
         // digits to 1 − nb/n in the other form.
@@ -455,8 +451,9 @@ impl From<Vec<u64>> for TriangleCounts {
 /// the run's score unit ([`score_unit`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CellSums {
-    /// The photon histories' scores: [`Moments`] over the histories up to the last one
-    /// that scored here (`photons.n`); those after it scored 0 ([`Moments::over`]).
+    /// The photon histories' scores: [`Moments`] over `photons.n` histories (those up to
+    /// the last chunk that scored here: its first photon plus its scoring histories; the
+    /// rest scored 0 and are added by [`Moments::over`]).
     pub photons: Moments,
     /// Contributions scored: photon crossings and connections, and direct-light
     /// replicates that saw light.
@@ -492,11 +489,12 @@ impl CellSums {
 /// The unit scores are tallied in, for a scene of total flux `total_flux_lm`: the power
 /// of two nearest the flux (1 for a scene without light). Scores scale with the flux, so
 /// in this unit their moments neither overflow nor underflow whatever the light's level
-/// (Σx⁴ of a 10⁸⁰ cd source would), and dividing by a power of two is exact: the
-/// relative errors and VOVs are the same bits at any level.
+/// (Σx⁴ of a 10⁸⁰ cd source would), and dividing by a power of two is exact: relative
+/// errors and VOVs agree to rounding at any level (to the bit between levels a power of
+/// two apart). Clamped to normal numbers, so that its inverse is finite too.
 pub fn score_unit(total_flux_lm: f64) -> f64 {
     if total_flux_lm > 0.0 && total_flux_lm.is_finite() {
-        2f64.powi((total_flux_lm.log2().round() as i32).min(f64::MAX_EXP - 1))
+        2f64.powi((total_flux_lm.log2().round() as i32).clamp(f64::MIN_EXP - 1, f64::MAX_EXP - 1))
     } else {
         1.0
     }

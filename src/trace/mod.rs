@@ -929,13 +929,12 @@ mod tests {
         fold_histories(&mut pending, &mut acc, &mut out);
         // Cell 2: one history of 4; cell 5: histories of 2 and 4 (mean 3, M₂ = 2, M₃ = 0,
         // M₄ = 2).
-        let moments = |n, mean, m2, m4, max| crate::tally::Moments {
+        let moments = |n, mean, m2, m4| crate::tally::Moments {
             n,
             mean,
             m2,
             m3: 0.0,
             m4,
-            max,
         };
         let cell = |cell, hits, moments| CellPartial {
             cell,
@@ -945,8 +944,8 @@ mod tests {
         assert_eq!(
             out,
             vec![
-                cell(2, 1, moments(1, 4.0, 0.0, 0.0, 4.0)),
-                cell(5, 3, moments(2, 3.0, 2.0, 2.0, 4.0))
+                cell(2, 1, moments(1, 4.0, 0.0, 0.0)),
+                cell(5, 3, moments(2, 3.0, 2.0, 2.0))
             ]
         );
         assert!(acc.iter().all(|p| p.hits == 0), "scratch left clean");
