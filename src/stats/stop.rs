@@ -193,8 +193,9 @@ pub const EPOCHS_BEFORE_JUDGING: usize = 4;
 
 /// Why the error target cannot be met, if it cannot: nothing has reached the target
 /// (`nothing_scored`) after [`EPOCHS_BEFORE_JUDGING`] epochs, or the forecast needs
-/// more photons than `max_photons` or more time than `time_limit_s`. `None` while it
-/// may be met, and without a target.
+/// more photons than `max_photons` or more time than `time_limit_s` at this epoch and at
+/// the one before (one noisy forecast does not decide). `None` while it may be met, and
+/// without a target.
 pub fn unreachable(
     target_error: Option<f64>,
     history: &[HistoryPoint],
@@ -214,28 +215,23 @@ pub fn unreachable(
             last.photons
         ));
     }
-    let Some(f) = forecast else {
-        // No forecast from finite errors: the photons needed pass what can be counted.
-        return last.rel_error.is_finite().then(|| {
-            format!(
-                "the error ({:.3e}) would need more photons than can be counted",
-                last.rel_error
-            )
-        });
-    };
-    if f.photons > max_photons {
-        return Some(format!(
-            "the forecast needs {} photons, more than the {max_photons} allowed",
-            f.photons
-        ));
-    }
-    match time_limit_s {
-        Some(limit) if f.total_s > limit => Some(format!(
-            "the forecast needs {:.1} s, more than the {limit} s time limit",
-            f.total_s
+    // Why a forecast (photons, total seconds) is beyond the budget; none from a finite
+    // error means the photons needed pass what can be counted.
+    let beyond = |f: Option<(u64, f64)>, error: f64| match f {
+        None => error.is_finite().then(|| {
+            format!("the error ({error:.3e}) would need more photons than can be counted")
+        }),
+        Some((photons, _)) if photons > max_photons => Some(format!(
+            "the forecast needs {photons} photons, more than the {max_photons} allowed"
         )),
-        _ => None,
-    }
+        Some((_, total_s)) => time_limit_s.filter(|&limit| total_s > limit).map(|limit| {
+            format!("the forecast needs {total_s:.1} s, more than the {limit} s time limit")
+        }),
+    };
+    let previous = &history[history.len() - 2];
+    let before = previous.forecast_photons.zip(previous.forecast_s);
+    beyond(before, previous.rel_error)?;
+    beyond(forecast.map(|f| (f.photons, f.total_s)), last.rel_error)
 }
 
 /// Why a run stopped (summary.json `stop_reason`).
@@ -279,6 +275,47 @@ mod tests {
             quantity: Quantity::Illuminance,
             estimator: Estimator::Auto,
         }]
+    }
+
+    #[test]
+    fn a_target_is_unreachable_once_two_forecasts_in_a_row_pass_the_budget() {
+        let point = |photons: u64, forecast: Option<u64>| HistoryPoint {
+            elapsed_s: photons as f64 * 1e-6,
+            photons,
+            rel_error: 0.1,
+            forecast_s: forecast.map(|p| p as f64 * 1e-6),
+            forecast_photons: forecast,
+        };
+        let f = |photons| {
+            Some(Forecast {
+                total_s: photons as f64 * 1e-6,
+                photons,
+            })
+        };
+        let mut h: Vec<HistoryPoint> = (1..=4).map(|k| point(k * 1000, Some(5000))).collect();
+        let judge = |h: &[HistoryPoint], now| unreachable(Some(0.01), h, now, false, 10_000, None);
+        assert_eq!(judge(&h, f(5000)), None, "within the budget");
+        h[3] = point(4000, Some(20_000));
+        assert_eq!(
+            judge(&h, f(20_000)),
+            None,
+            "one forecast beyond does not decide"
+        );
+        h.push(point(5000, Some(30_000)));
+        let why = judge(&h, f(30_000)).expect("two in a row");
+        assert!(
+            why.contains("30000 photons, more than the 10000 allowed"),
+            "{why}"
+        );
+        assert!(unreachable(None, &h, f(30_000), false, 10_000, None).is_none());
+        // Time: the forecast's seconds beyond the limit, twice.
+        let t = unreachable(Some(0.01), &h, f(30_000), false, u64::MAX, Some(0.01));
+        assert!(t.expect("beyond the time limit").contains("time limit"));
+        // Nothing scored: decided at once (after the first epochs).
+        assert!(unreachable(Some(0.01), &h[..4], None, true, u64::MAX, None)
+            .expect("nothing reached")
+            .contains("nothing has reached"));
+        assert!(unreachable(Some(0.01), &h[..3], None, true, u64::MAX, None).is_none());
     }
 
     #[test]
