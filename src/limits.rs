@@ -57,11 +57,12 @@ pub const BYTES_PER_INSTANCE: f64 = 560.0;
 
 /// Outputs per receiver cell at their peak (bytes): summary.json (the summary, its
 /// pretty JSON text), report.html (the summary as JSON data, then as text), the EXR, CSV
-/// and PNGs. Measured: a 2000 × 2000-cell receiver peaked at 1.70 GB RSS at the end of a
-/// 2-thread run, 420 bytes per cell, of which 88 were the tallies then (`CellSums`
-/// before the direct light's moments; the estimate adds its size today) and 96 the
-/// workers' scratch.
-pub const OUTPUT_BYTES_PER_CELL: f64 = 240.0;
+/// and PNGs. Measured (2026-12-01): a 2000 × 2000-cell receiver peaked at 3.96 GB RSS at
+/// the end of a 2-thread run, 991 bytes per cell, of which 96 are the tallies
+/// (`CellSums`) and 112 the workers' scratch (2 × `CellPartial`): the per-cell status
+/// arrays (scoring histories, VOV, dof, status, upper bound) more than tripled the
+/// outputs' 240 bytes of before.
+pub const OUTPUT_BYTES_PER_CELL: f64 = 790.0;
 
 /// Chunk tallies a worker keeps from epoch to epoch (an epoch lasts up to 2 s, about
 /// 1 M photons per thread in the office scene: 256 chunks of 4096 photons). An epoch

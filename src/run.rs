@@ -267,7 +267,7 @@ impl<'s> Engine<'s> {
         let flux = tracer.emitters.total_flux_lm;
         if !flux.is_finite() {
             return Err(Error::input(
-                "lights",
+                format!("{}: lights", scene.path.display()),
                 format!(
                     "their total flux, {flux} lm, is beyond f64's range ({:e}): scale the \
                      lights down (results scale with them)",

@@ -42,6 +42,20 @@ fn plane(intensity: f64) -> String {
     )
 }
 
+/// Options of a run of `s` on 2 threads with an error target, and a photon budget
+/// other than the scene's where `photons` says so.
+fn with_target(
+    s: &luxtally::scene::Scene,
+    target_error: f64,
+    photons: Option<u64>,
+) -> luxtally::run::RunOptions {
+    let mut opts = luxtally::run::RunOptions::from_scene(s);
+    opts.stop.target_error = Some(target_error);
+    opts.stop.photons = photons.or(opts.stop.photons);
+    opts.threads = 2;
+    opts
+}
+
 fn close(a: f64, b: f64, rel: f64) -> bool {
     a == b || (a - b).abs() <= rel * a.abs().max(b.abs())
 }
@@ -116,6 +130,10 @@ fn a_flux_beyond_f64_is_refused_in_one_line() {
     assert_eq!(out.status.code(), Some(1), "{err}");
     assert_eq!(err.trim().lines().count(), 1, "{err}");
     assert!(err.contains("lights") && err.contains("flux"), "{err}");
+    assert!(
+        err.contains(&scene.display().to_string()),
+        "names the file: {err}"
+    );
 }
 
 fn tempdir(name: &str) -> std::path::PathBuf {
@@ -257,11 +275,7 @@ const BOXES_ON_A_FLOOR: &str = r#"
 #[test]
 fn cells_nothing_reaches_are_dark_with_a_bound_and_the_target_is_met_on_the_lit_ones() {
     let s = scene(BOXES_ON_A_FLOOR);
-    let mut opts = luxtally::run::RunOptions::from_scene(&s);
-    opts.stop.target_error = Some(0.02);
-    opts.stop.photons = Some(50_000_000);
-    opts.threads = 2;
-    let summary = run_options(&s, &opts);
+    let summary = run_options(&s, &with_target(&s, 0.02, Some(50_000_000)));
     let r = &summary.receivers["floor"];
     assert_eq!(summary.stop_reason.as_deref(), Some("target_error"));
     // Cells wholly under a box (cells 2–5 and 10–13 on both axes) see nothing but at
@@ -329,10 +343,7 @@ fn a_target_nothing_reaches_is_reported_unreachable_and_can_end_the_run() {
         cells = [4, 4]
     "#;
     let s = scene(toml);
-    let mut opts = luxtally::run::RunOptions::from_scene(&s);
-    opts.stop.target_error = Some(0.05);
-    opts.stop.photons = Some(100_000_000);
-    opts.threads = 2;
+    let mut opts = with_target(&s, 0.05, Some(100_000_000));
     opts.stop.stop_if_unreachable = true;
     let summary = run_options(&s, &opts);
     assert_eq!(summary.stop_reason.as_deref(), Some("unreachable"));
@@ -346,10 +357,7 @@ fn a_target_nothing_reaches_is_reported_unreachable_and_can_end_the_run() {
 fn a_target_beyond_the_photon_budget_is_reported_unreachable() {
     // 0.01 % on the plane needs far more than 200,000 photons.
     let s = scene(&plane(1000.0));
-    let mut opts = luxtally::run::RunOptions::from_scene(&s);
-    opts.stop.target_error = Some(1e-6);
-    opts.stop.photons = Some(400_000);
-    opts.threads = 2;
+    let mut opts = with_target(&s, 1e-6, Some(400_000));
     let summary = run_options(&s, &opts);
     assert_eq!(summary.stop_reason.as_deref(), Some("photons"));
     let why = summary.target_unreachable.expect("said why");
@@ -367,10 +375,7 @@ fn the_bundled_cornell_floor_meets_one_percent_with_its_dark_cells_counted() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell.toml");
     let s = luxtally::scene::load(&path).expect("cornell loads");
     // `luxtally run scenes/cornell.toml --target-error 0.01`: the scene's own budget.
-    let mut opts = luxtally::run::RunOptions::from_scene(&s);
-    opts.stop.target_error = Some(0.01);
-    opts.threads = 2;
-    let summary = run_options(&s, &opts);
+    let summary = run_options(&s, &with_target(&s, 0.01, None));
     assert_eq!(summary.stop_reason.as_deref(), Some("target_error"));
     let r = &summary.receivers["floor"];
     assert!(r.dark_cells > 100, "{} dark cells", r.dark_cells);

@@ -228,8 +228,12 @@ pub fn build(state: &RunState<'_>) -> Summary {
     // The cap's bound is judged against the relative σ of the target and of the scene
     // map's mean.
     let global_sigma_rel = global.mean_sigma_lx / global.mean_illuminance_lx;
-    let target_sigma_rel =
-        crate::run::target_error(scene, state.target, t, state.setup.total_flux_lm, false);
+    // The last epoch's error is the target's relative error now, unless it was absolute
+    // or the tallies moved on since (a merge): then computed again.
+    let target_sigma_rel = match state.history.last() {
+        Some(p) if !state.options.stop.absolute && p.photons == t.photons => p.rel_error,
+        _ => crate::run::target_error(scene, state.target, t, state.setup.total_flux_lm, false),
+    };
     Summary {
         scene: scene.name.clone(),
         backend: state.options.backend.name().to_string(),

@@ -60,7 +60,7 @@ struct PhotonPart {
 }
 
 fn photon_part(c: &CellSums, counts: Counts) -> PhotonPart {
-    let m = c.photons.over(counts.photons);
+    let m = c.photon_moments(counts);
     let (value, var) = m.mean_and_variance();
     if !(var >= 0.0) {
         return PhotonPart {
@@ -82,7 +82,7 @@ fn direct_part(c: &CellSums, counts: Counts) -> (f64, f64) {
     if counts.direct_replicates == 0 {
         return (0.0, 0.0);
     }
-    let (value, var) = c.direct.over(counts.direct_replicates).mean_and_variance();
+    let (value, var) = c.direct_moments(counts).mean_and_variance();
     (value, if var >= 0.0 { var } else { 0.0 })
 }
 
@@ -92,7 +92,7 @@ pub fn direct_estimate(c: &CellSums, counts: Counts) -> (f64, f64) {
     if counts.direct_replicates == 0 {
         return (0.0, 0.0);
     }
-    let (value, var) = c.direct.over(counts.direct_replicates).mean_and_variance();
+    let (value, var) = c.direct_moments(counts).mean_and_variance();
     (value * counts.unit, var.sqrt() * counts.unit)
 }
 
@@ -181,17 +181,15 @@ fn neighbour_median(var: &[f64], nu: usize, nv: usize, i: usize, j: usize) -> f6
 /// equal, 1 when nothing is known. Invariant
 /// to the light's level (the moments are central and in the score unit).
 pub fn cell_vov(c: &CellSums, counts: Counts) -> f64 {
-    let part = |m: crate::tally::Moments, n: u64| {
-        let m = m.over(n);
-        match m.mean_and_variance() {
-            (_, var) if var > 0.0 => (m.vov(), var),
-            _ => (0.0, 0.0),
-        }
+    let (photons, direct) = (c.photon_moments(counts), c.direct_moments(counts));
+    let part = |m: &crate::tally::Moments| match m.mean_and_variance() {
+        (_, var) if var > 0.0 => (m.vov(), var),
+        _ => (0.0, 0.0),
     };
-    let (vov_p, var_p) = part(c.photons, counts.photons);
-    let (vov_d, var_d) = part(c.direct, counts.direct_replicates);
+    let (vov_p, var_p) = part(&photons);
+    let (vov_d, var_d) = part(&direct);
     let var = var_p + var_d;
-    let samples = c.photons.over(counts.photons).n + c.direct.over(counts.direct_replicates).n;
+    let samples = photons.n + direct.n;
     if var > 0.0 {
         (vov_p * var_p * var_p + vov_d * var_d * var_d) / (var * var)
     } else if samples >= 2 && c.hits > 0 {
@@ -294,6 +292,13 @@ fn mean_error_of(pairs: impl Iterator<Item = (f64, f64)>) -> (f64, Averaged, f64
     (mean, rel, rms_sigma, quadratic_mean)
 }
 
+/// One-sided 95 % quantile of the normal distribution.
+const Z_95: f64 = 1.644_853_626_951_472_2;
+
+/// No score in N trials bounds the chance of one by this over N at 95 % (−ln 0.05 =
+/// 2.996, rounded up).
+const NO_SCORE_95: f64 = 3.0;
+
 /// Fewest effective samples (Welch–Satterthwaite degrees of freedom, [`cell_dof`])
 /// behind a reliable cell's σ: at 30, Student's t puts 1.0 × 10⁻⁴ beyond 4.5σ (the
 /// normal 6.8 × 10⁻⁶), and a cell's own variance estimate is good to about ±25 %.
@@ -346,8 +351,8 @@ pub fn cell_dof(c: &CellSums, counts: Counts, var_p: f64, var_d: f64) -> f64 {
             0.0
         }
     };
-    let n_p = c.photons.over(counts.photons).effective_count();
-    let n_d = c.direct.over(counts.direct_replicates).effective_count();
+    let n_p = c.photon_moments(counts).effective_count();
+    let n_d = c.direct_moments(counts).effective_count();
     let denominator = term(var_p, n_p) + term(var_d, n_d);
     let var = var_p + var_d;
     if denominator > 0.0 {
@@ -369,7 +374,7 @@ pub fn student_t_95(dof: f64) -> f64 {
     if dof < 10.0 {
         return TABLE[dof.floor() as usize - 1];
     }
-    let z = 1.644_853_626_951_472_2_f64;
+    let z = Z_95;
     let (z3, z5) = (z.powi(3), z.powi(5));
     z + (z3 + z) / (4.0 * dof) + (5.0 * z5 + 16.0 * z3 + 3.0 * z) / (96.0 * dof * dof)
 }
@@ -385,30 +390,27 @@ pub fn student_t_95(dof: f64) -> f64 {
 /// score unit ([`typical_scores`]); it assumes the dark cell, if it were reached, would
 /// be reached like a typical cell.
 pub fn dark_upper_bound(counts: Counts, typical: (f64, f64)) -> f64 {
-    let photons = if counts.photons > 0 {
-        3.0 / counts.photons as f64 * typical.0
-    } else {
-        0.0
+    let part = |n: u64, typical: f64| {
+        if n > 0 {
+            NO_SCORE_95 / n as f64 * typical
+        } else {
+            0.0
+        }
     };
-    let direct = if counts.direct_replicates > 0 {
-        3.0 / counts.direct_replicates as f64 * typical.1
-    } else {
-        0.0
-    };
-    (photons + direct) * counts.unit
+    (part(counts.photons, typical.0) + part(counts.direct_replicates, typical.1)) * counts.unit
 }
 
 /// The σ an unreliable cell is judged by: its own σ, which it cannot vouch for, widened
 /// by Student's t on its degrees of freedom ν ([`cell_dof`]) against the normal's
 /// quantile, t₀.₉₅(ν)/z₀.₉₅, and by 1 + √VOV (√VOV is the relative spread of σ² itself).
 pub fn widened_sigma(sigma: f64, vov: f64, dof: f64) -> f64 {
-    sigma * student_t_95(dof) / 1.644_853_626_951_472_2 * (1.0 + vov.sqrt())
+    sigma * student_t_95(dof) / Z_95 * (1.0 + vov.sqrt())
 }
 
 /// Upper bound (about 95 %) on the value of an unreliable cell: value + 1.645 times its
 /// [`widened_sigma`].
 pub fn unreliable_upper_bound(value: f64, sigma: f64, vov: f64, dof: f64) -> f64 {
-    value + 1.644_853_626_951_472_2 * widened_sigma(sigma, vov, dof)
+    value + Z_95 * widened_sigma(sigma, vov, dof)
 }
 
 /// What a history and a replicate leave in a typical cell of a receiver, in the score
@@ -429,7 +431,7 @@ fn typical_scores(cells: &[CellSums], counts: Counts) -> (f64, f64) {
         .map(|c| c.photons.sum() / c.scoring_histories as f64)
         .collect();
     let per_sample = (cells.iter())
-        .map(|c| c.direct.over(counts.direct_replicates).mean / samples)
+        .map(|c| c.direct_moments(counts).mean / samples)
         .filter(|&y| y > 0.0)
         .collect();
     (median(per_history), median(per_sample))
@@ -543,54 +545,45 @@ pub fn receiver_stats(
     counts: Counts,
     picked: Option<&[usize]>,
 ) -> ReceiverStats {
+    use rayon::prelude::*;
     let (values, sigmas, vars) = cell_values_and_parts(cells, shape, counts);
-    let indices: Vec<usize> = match picked {
-        None => (0..cells.len()).collect(),
-        Some(picked) => picked.to_vec(),
-    };
-    let typical = typical_scores(cells, counts);
+    // Local index of the `i`-th cell summarised (a whole receiver needs no list).
+    let count = picked.map_or(cells.len(), <[usize]>::len);
+    let index = |i: usize| picked.map_or(i, |p| p[i]);
     let receiver_scored = cells.iter().any(|c| c.hits > 0);
     // Each cell's VOV and degrees of freedom, in parallel as the values above.
-    let vov_dof: Vec<(f64, f64)> = {
-        use rayon::prelude::*;
-        indices
-            .par_iter()
-            .with_min_len(4096)
-            .map(|&k| {
-                let c = &cells[k];
-                if c.hits > 0 || counts.dark {
-                    let dof = cell_dof(c, counts, vars[k].0, vars[k].1);
-                    (cell_vov(c, counts), dof)
-                } else {
-                    (1.0, 0.0)
-                }
-            })
-            .collect()
-    };
+    let vov_dof: Vec<(f64, f64)> = (0..count)
+        .into_par_iter()
+        .with_min_len(4096)
+        .map(|i| {
+            let k = index(i);
+            let c = &cells[k];
+            if c.hits > 0 || counts.dark {
+                let dof = cell_dof(c, counts, vars[k].0, vars[k].1);
+                (cell_vov(c, counts), dof)
+            } else {
+                (1.0, 0.0)
+            }
+        })
+        .collect();
+    // The same bound for every dark cell, computed only when there is one.
+    let dark_bound = std::cell::OnceCell::new();
     let mut s = ReceiverStats::default();
-    for (&k, &(vov, dof)) in indices.iter().zip(&vov_dof) {
+    for (i, &(vov, dof)) in vov_dof.iter().enumerate() {
+        let k = index(i);
         let c = &cells[k];
+        let status = cell_status(c, counts, receiver_scored, vov, dof);
         s.values.push(values[k]);
         s.sigma.push(sigmas[k]);
         s.hits.push(c.hits);
         s.scoring_histories.push(c.scoring_histories);
-        let lit = c.hits > 0 || counts.dark;
         s.vov.push(vov);
         s.dof.push(dof);
-        let status = if lit {
-            if dof >= MIN_RELIABLE_DOF && vov <= MAX_RELIABLE_VOV || counts.dark {
-                CellStatus::Reliable
-            } else {
-                CellStatus::Unreliable
-            }
-        } else if receiver_scored {
-            CellStatus::Dark
-        } else {
-            CellStatus::Unknown
-        };
         s.status.push(status);
         s.upper_bound.push(match status {
-            CellStatus::Dark => dark_upper_bound(counts, typical),
+            CellStatus::Dark => {
+                *dark_bound.get_or_init(|| dark_upper_bound(counts, typical_scores(cells, counts)))
+            }
             CellStatus::Unreliable => unreliable_upper_bound(values[k], sigmas[k], vov, dof),
             _ => f64::NAN,
         });
@@ -621,11 +614,33 @@ pub fn receiver_stats(
     let count = |status| s.status.iter().filter(|&&x| x == status).count();
     s.unreliable_cells = count(CellStatus::Unreliable);
     s.dark_cells = count(CellStatus::Dark);
-    s.dark_bound = (s.upper_bound.iter().zip(&s.status))
-        .filter(|(_, &x)| x == CellStatus::Dark)
-        .map(|(b, _)| *b)
-        .fold(0.0, f64::max);
+    s.dark_bound = dark_bound.get().copied().unwrap_or(0.0);
     s
+}
+
+/// A cell's [`CellStatus`] from its VOV and degrees of freedom, `receiver_scored` when
+/// any cell of its receiver scored. In a scene that emits nothing every cell is an
+/// exact 0 ± 0: reliable.
+fn cell_status(
+    c: &CellSums,
+    counts: Counts,
+    receiver_scored: bool,
+    vov: f64,
+    dof: f64,
+) -> CellStatus {
+    if counts.dark {
+        CellStatus::Reliable
+    } else if c.hits > 0 {
+        if dof >= MIN_RELIABLE_DOF && vov <= MAX_RELIABLE_VOV {
+            CellStatus::Reliable
+        } else {
+            CellStatus::Unreliable
+        }
+    } else if receiver_scored {
+        CellStatus::Dark
+    } else {
+        CellStatus::Unknown
+    }
 }
 
 /// The scene map's illuminance and its odd/even error (method.md §3).

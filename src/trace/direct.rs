@@ -359,8 +359,6 @@ impl DirectLight<'_> {
         let cell_point = |a, b| grid.cell_point((i, j), a, b);
         let choice = LightChoice::for_cell(self.emitters, grid, cell_point(0.5, 0.5));
         let samples = m * m;
-        // Replicates are tallied in the run's score unit (exact: a power of two).
-        let score_scale = 1.0 / crate::tally::score_unit(self.emitters.total_flux_lm);
         let mut rays = 0;
         let mut block_start = first;
         while block_start < first + count {
@@ -400,7 +398,8 @@ impl DirectLight<'_> {
                 }
             }
             for &y in &s.totals {
-                sums.add_direct(y * score_scale);
+                // In the run's score unit (exact: a power of two).
+                sums.add_direct(y / self.emitters.score_unit);
             }
             rays += s.rays.len() as u64;
             block_start += block;

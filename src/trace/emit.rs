@@ -16,6 +16,8 @@ pub struct Emitters {
     pub emitters: Vec<Arc<dyn Emitter>>,
     pub flux_lm: Vec<f64>,
     pub total_flux_lm: f64,
+    /// The unit receiver scores are tallied in ([`crate::tally::score_unit`]).
+    pub score_unit: f64,
     cdf: Vec<f64>,
 }
 
@@ -50,6 +52,7 @@ impl Emitters {
             emitters,
             flux_lm,
             total_flux_lm,
+            score_unit: crate::tally::score_unit(total_flux_lm),
             cdf,
         }
     }

@@ -403,7 +403,7 @@ impl<'a> Tracer<'a> {
 
     /// Empty tallies for this scene's triangles and receiver cells.
     pub fn new_tallies(&self) -> Tallies {
-        let unit = crate::tally::score_unit(self.emitters.total_flux_lm);
+        let unit = self.emitters.score_unit;
         let mut t = Tallies::new(self.geometry.triangle_count(), self.cell_count(), unit);
         t.dark = !(self.emitters.total_flux_lm > 0.0);
         t
@@ -437,8 +437,7 @@ impl<'a> Tracer<'a> {
         tally.clear();
         // Scores come out in the tallies' score unit: the flux divided by it (a power of
         // two, so every score is the same bits as in lm, scaled exactly).
-        let flux =
-            self.emitters.total_flux_lm / crate::tally::score_unit(self.emitters.total_flux_lm);
+        let flux = self.emitters.total_flux_lm / self.emitters.score_unit;
         let live = if flux > 0.0 { count as usize } else { 0 };
         // Every photon ray is a closest-hit ray from t = 0 to ∞: `tnear` and `tfar` are
         // set once here and never change while the batch shrinks.
