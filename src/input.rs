@@ -107,8 +107,63 @@ pub fn check_keys(
     Err(Error::input(format!("{at}.{key}"), message))
 }
 
-pub fn vec3(a: [f64; 3]) -> DVec3 {
-    DVec3::from_array(a)
+pub fn vec3(a: impl Into<[f64; 3]>) -> DVec3 {
+    DVec3::from_array(a.into())
+}
+
+/// The largest coordinate or length, in metres, a scene may hold. Rays reach the ray
+/// casters in f32, and Embree takes ray origins and directions only within ±1.844e18
+/// (its `FLT_LARGE`; beyond, it aborts); the points made from the input (a box's far
+/// corner, a directional light's disk beyond the scene, the scene re-centred) lie a few
+/// scene sizes further at most.
+pub const MAX_COORDINATE_M: f64 = 1e16;
+
+/// Whether `p` is finite and within ±[`MAX_COORDINATE_M`] on every axis.
+pub fn within_reach(p: DVec3) -> bool {
+    p.is_finite() && p.abs().max_element() <= MAX_COORDINATE_M
+}
+
+/// What is wrong with a coordinate beyond reach.
+pub fn beyond_reach(what: impl std::fmt::Display) -> String {
+    format!(
+        "{what} is beyond the ±{MAX_COORDINATE_M:e} m a scene may span (rays are traced in f32)"
+    )
+}
+
+/// A point or a vector in metres, as the scene file writes it: three numbers, each
+/// within ±[`MAX_COORDINATE_M`] (checked as it is read, so messages name the key).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coords(pub [f64; 3]);
+
+impl From<Coords> for [f64; 3] {
+    fn from(c: Coords) -> [f64; 3] {
+        c.0
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for Coords {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Coords, D::Error> {
+        let a = <[f64; 3]>::deserialize(d)?;
+        match a.iter().find(|x| !(x.abs() <= MAX_COORDINATE_M)) {
+            Some(x) => Err(de::Error::custom(beyond_reach(format!("{x:e} m")))),
+            None => Ok(Coords(a)),
+        }
+    }
+}
+
+/// A length in metres, as the scene file writes it: within ±[`MAX_COORDINATE_M`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Length(pub f64);
+
+impl<'de> serde::Deserialize<'de> for Length {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Length, D::Error> {
+        let x = f64::deserialize(d)?;
+        if x.abs() <= MAX_COORDINATE_M {
+            Ok(Length(x))
+        } else {
+            Err(de::Error::custom(beyond_reach(format!("{x:e} m"))))
+        }
+    }
 }
 
 /// A key `what` (e.g. `type "spot" lights`) needs: `at.key: missing` otherwise.
@@ -121,10 +176,12 @@ pub fn required<T>(x: Option<T>, at: &str, key: &str, what: &str) -> Result<T> {
     })
 }
 
-/// A direction the user wrote: normalised, zero rejected.
+/// A direction the user wrote: normalised, zero rejected. Any finite non-zero
+/// direction works: one whose length over- or underflows is scaled first.
 pub fn direction(d: [f64; 3], at: &str, key: &str) -> Result<DVec3> {
-    vec3(d)
-        .try_normalize()
+    let v = vec3(d);
+    v.try_normalize()
+        .or_else(|| (v / v.abs().max_element()).try_normalize())
         .ok_or_else(|| Error::input(format!("{at}.{key}"), "zero direction"))
 }
 

@@ -5,7 +5,7 @@ use super::{
     from_point, single, BoundingSphere, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
 };
 use crate::error::{Error, Result};
-use crate::input::{amount, required, vec3};
+use crate::input::{amount, required, vec3, Coords};
 use crate::sampling::{cosine_hemisphere, uniform, SphericalRect};
 use glam::DVec3;
 use rand_pcg::Pcg32;
@@ -17,9 +17,9 @@ use std::sync::Arc;
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct AreaFile {
-    pub corner: Option<[f64; 3]>,
-    pub u: Option<[f64; 3]>,
-    pub v: Option<[f64; 3]>,
+    pub corner: Option<Coords>,
+    pub u: Option<Coords>,
+    pub v: Option<Coords>,
     pub flux_lm: Option<f64>,
     pub luminance_cdm2: Option<f64>,
 }

@@ -5,7 +5,7 @@ use super::{
     from_point, BoundingSphere, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
 };
 use crate::error::{Error, Result};
-use crate::input::{amount, direction, required, vec3};
+use crate::input::{amount, direction, required, vec3, Coords};
 use crate::photometry::Photometry;
 use glam::{DMat3, DVec3};
 use rand_pcg::Pcg32;
@@ -18,8 +18,8 @@ use std::sync::Arc;
 #[serde(deny_unknown_fields)]
 pub struct LuminaireFile {
     pub file: Option<String>,
-    pub position: Option<[f64; 3]>,
-    pub positions: Option<Vec<[f64; 3]>>,
+    pub position: Option<Coords>,
+    pub positions: Option<Vec<Coords>>,
     pub aim: Option<[f64; 3]>,
     pub rotate_deg: Option<f64>,
     pub multiplier: Option<f64>,

@@ -4,7 +4,7 @@ use super::{
     from_point, single, BoundingSphere, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
 };
 use crate::error::{Error, Result};
-use crate::input::{amount, required, vec3};
+use crate::input::{amount, required, vec3, Coords};
 use crate::rng::PhotonStreams;
 use crate::sampling::{sphere_from_square, uniform_f32, uniform_sphere};
 use glam::DVec3;
@@ -17,7 +17,7 @@ use std::sync::Arc;
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct PointFile {
-    pub position: Option<[f64; 3]>,
+    pub position: Option<Coords>,
     pub intensity_cd: Option<f64>,
     pub flux_lm: Option<f64>,
 }

@@ -5,7 +5,7 @@ use super::{
     from_point, single, BoundingSphere, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
 };
 use crate::error::{Error, Result};
-use crate::input::{amount, direction, required, vec3};
+use crate::input::{amount, direction, required, vec3, Coords};
 use crate::sampling::{uniform, uniform_cone};
 use glam::DVec3;
 use rand_pcg::Pcg32;
@@ -17,7 +17,7 @@ use std::sync::Arc;
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct SpotFile {
-    pub position: Option<[f64; 3]>,
+    pub position: Option<Coords>,
     pub direction: Option<[f64; 3]>,
     pub intensity_cd: Option<f64>,
     pub cone_deg: Option<f64>,

@@ -7,6 +7,7 @@ use super::grid::{Grid, TYPE_A, TYPE_B, TYPE_C};
 use super::sample::Sampler;
 use super::text::{self, at, check_increasing, check_range, Tokens, MAX_ANGLES, MAX_VALUES};
 use super::{Format, Opening, PhotometricType, Photometry, Symmetry, Tilt};
+use crate::input::{beyond_reach, MAX_COORDINATE_M};
 use crate::Result;
 use std::path::Path;
 
@@ -248,9 +249,16 @@ impl Records {
                 ))
             }
         };
-        let (width, _) = t.number("the luminous width")?;
-        let (length, _) = t.number("the luminous length")?;
-        let (height, _) = t.number("the luminous height")?;
+        let mut dimension = |what: &str| -> Result<f64> {
+            let (v, line) = t.number(what)?;
+            if (v * unit_m).abs() > MAX_COORDINATE_M {
+                return Err(at(origin, line, format!("{what}: {}", beyond_reach(v))));
+            }
+            Ok(v)
+        };
+        let width = dimension("the luminous width")?;
+        let length = dimension("the luminous length")?;
+        let height = dimension("the luminous height")?;
 
         let (ballast, ballast_line) = t.number("the ballast factor")?;
         positive(origin, ballast_line, "ballast factor", ballast)?;

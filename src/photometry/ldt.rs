@@ -7,6 +7,7 @@ use super::grid::{Grid, TYPE_C};
 use super::sample::Sampler;
 use super::text::{self, at, check_increasing, check_range, MAX_ANGLES, MAX_VALUES};
 use super::{Format, LampSet, Opening, PhotometricType, Photometry, Symmetry};
+use crate::input::{beyond_reach, MAX_COORDINATE_M};
 use crate::Result;
 
 /// Largest number of lamp sets accepted (the format allows 20; some writers more).
@@ -192,6 +193,13 @@ impl Header {
             let v = f.number(n, what)?;
             if v < 0.0 {
                 return Err(at(origin, n, format!("{what} {v} mm is negative")));
+            }
+            if v / 1000.0 > MAX_COORDINATE_M {
+                return Err(at(
+                    origin,
+                    n,
+                    format!("{what}: {}", beyond_reach(format!("{v} mm"))),
+                ));
             }
             Ok(v / 1000.0)
         };

@@ -7,7 +7,7 @@ pub use super::material::MaterialFile;
 use super::shapes;
 use super::Estimator;
 use crate::error::{Error, Result};
-use crate::input::{self, check_keys};
+use crate::input::{self, check_keys, Coords, Length};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 
@@ -66,23 +66,23 @@ pub enum ShapeFile {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct BoxFile {
-    pub min: Option<[f64; 3]>,
-    pub max: Option<[f64; 3]>,
+    pub min: Option<Coords>,
+    pub max: Option<Coords>,
 }
 
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct RectFile {
-    pub corner: Option<[f64; 3]>,
-    pub u: Option<[f64; 3]>,
-    pub v: Option<[f64; 3]>,
+    pub corner: Option<Coords>,
+    pub u: Option<Coords>,
+    pub v: Option<Coords>,
 }
 
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct SphereFile {
-    pub center: Option<[f64; 3]>,
-    pub radius: Option<f64>,
+    pub center: Option<Coords>,
+    pub radius: Option<Length>,
     pub subdivisions: Option<u32>,
 }
 
@@ -163,7 +163,7 @@ pub struct ObjectFile {
     pub material: Option<String>,
     pub scale: Option<ScaleFile>,
     pub rotate_deg: Option<[f64; 3]>,
-    pub translate: Option<[f64; 3]>,
+    pub translate: Option<Coords>,
     /// Per-triangle tallies (the scene map) for this object; default true, false when
     /// the object has `instances` or `grid`.
     pub map: Option<bool>,
@@ -241,7 +241,7 @@ pub fn object(value: toml::Value, origin: &str, path: &str) -> Result<ObjectEntr
 pub struct InstanceFile {
     pub scale: Option<ScaleFile>,
     pub rotate_deg: Option<[f64; 3]>,
-    pub translate: Option<[f64; 3]>,
+    pub translate: Option<Coords>,
 }
 
 /// `grid = {count = [nx, ny], spacing = [dx, dy]}`: copies at (i·dx, j·dy, 0).
@@ -249,16 +249,16 @@ pub struct InstanceFile {
 #[serde(deny_unknown_fields)]
 pub struct GridFile {
     pub count: [u64; 2],
-    pub spacing: [f64; 2],
+    pub spacing: [Length; 2],
 }
 
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct ReceiverFile {
     pub name: String,
-    pub corner: [f64; 3],
-    pub u: [f64; 3],
-    pub v: [f64; 3],
+    pub corner: Coords,
+    pub u: Coords,
+    pub v: Coords,
     pub cells: [u32; 2],
     pub quantity: Option<QuantityName>,
     pub view_direction: Option<[f64; 3]>,
@@ -278,8 +278,8 @@ pub enum QuantityName {
 #[derive(Deserialize, Debug)]
 #[serde(deny_unknown_fields)]
 pub struct CameraFile {
-    pub position: [f64; 3],
-    pub look_at: [f64; 3],
+    pub position: Coords,
+    pub look_at: Coords,
     pub up: Option<[f64; 3]>,
     pub fov_deg: f64,
     pub resolution: [u32; 2],

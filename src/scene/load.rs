@@ -17,7 +17,7 @@ use super::{
 };
 use crate::criteria::{self, StopCriteria};
 use crate::error::{Error, Result};
-use crate::input::{direction, required, vec3};
+use crate::input::{self, direction, required, vec3};
 use crate::light::{self, LoadContext};
 use glam::{DAffine3, DVec3};
 use std::path::{Path, PathBuf};
@@ -54,7 +54,7 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         let entry = file::object(value, origin, &format!("objects[{i}]"))?;
         load_object(&entry, i, origin, base_dir, &mut materials, &mut builder)?;
     }
-    let geometry = builder.finish(origin)?;
+    let geometry = builder.finish()?;
     let lights = lights(raw.lights, origin, base_dir)?;
     let receivers = receivers(raw.receivers, origin)?;
 
@@ -152,6 +152,12 @@ struct MappedPart {
 
 impl GeometryBuilder {
     fn add(&mut self, mesh: Mesh, material: Vec<u32>, object: u32, at: &str) -> Result<()> {
+        if let Some(bad) = mesh.vertices.iter().find(|v| !input::within_reach(**v)) {
+            return Err(Error::input(
+                at,
+                input::beyond_reach(format!("vertex {bad} (after the transforms)")),
+            ));
+        }
         // Geometry indexes vertices with u32.
         if self.mapped_vertices + mesh.vertices.len() > u32::MAX as usize {
             return Err(Error::input(
@@ -183,7 +189,7 @@ impl GeometryBuilder {
         within_limit(total, MAX_INSTANCES, "instances", "", at)
     }
 
-    fn finish(mut self, origin: &str) -> Result<Geometry> {
+    fn finish(mut self) -> Result<Geometry> {
         let (vertices, triangles, material, object) = if self.mapped.len() == 1 {
             let part = self.mapped.pop().expect("one part");
             let object = vec![part.object; part.mesh.triangles.len()];
@@ -208,12 +214,6 @@ impl GeometryBuilder {
             }
             (vertices, triangles, material, object)
         };
-        if let Some(bad) = vertices.iter().find(|v| !v.is_finite()) {
-            return Err(Error::input(
-                origin,
-                format!("object vertex {bad} is not finite after transforms"),
-            ));
-        }
         Ok(Geometry::with_instances(
             &vertices,
             triangles,
@@ -336,6 +336,15 @@ fn file_prototypes(
     Ok((protos, placements))
 }
 
+/// The corners of the box around `vertices` (lowest, highest).
+fn bounds_of(vertices: &[DVec3]) -> [DVec3; 2] {
+    vertices
+        .iter()
+        .fold([DVec3::INFINITY, DVec3::NEG_INFINITY], |[lo, hi], v| {
+            [lo.min(*v), hi.max(*v)]
+        })
+}
+
 /// How an object is placed: its index, own transform and copies; `at` names it.
 struct Placed {
     object: u32,
@@ -357,6 +366,17 @@ impl Placed {
         builder.check_instances(copies_total, at)?;
         let object_tf = self.transform.affine();
         let base = builder.prototypes.len() as u32;
+        let bounds: Vec<[DVec3; 2]> = prototypes.iter().map(|p| bounds_of(&p.vertices)).collect();
+        if let Some(bad) = prototypes
+            .iter()
+            .flat_map(|p| &p.vertices)
+            .find(|v| !input::within_reach(**v))
+        {
+            return Err(Error::input(
+                format!("{at}.file"),
+                input::beyond_reach(format!("vertex {bad}")),
+            ));
+        }
         builder.prototypes.extend(prototypes);
         for copy in &self.copies {
             for (proto, node) in placements {
@@ -365,6 +385,21 @@ impl Placed {
                     return Err(Error::input(
                         at,
                         "an instance transform is not finite or not invertible",
+                    ));
+                }
+                let [lo, hi] = bounds[*proto as usize];
+                let empty = lo.x > hi.x;
+                if let Some(bad) = (0..8)
+                    .filter(|_| !empty)
+                    .map(|k| {
+                        DVec3::select(glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), hi, lo)
+                    })
+                    .map(|corner| world.transform_point3(corner))
+                    .find(|p| !input::within_reach(*p))
+                {
+                    return Err(Error::input(
+                        at,
+                        input::beyond_reach(format!("a copy's bounding-box corner {bad}")),
                     ));
                 }
                 builder.placements.push(Placement {
@@ -392,10 +427,10 @@ impl Placed {
             .sum();
         builder.check_mapped(per_copy.saturating_mul(self.copies.len() as u64), at)?;
         let (mut mesh, per_tri) = flatten(prototypes, placements);
-        if let Some(bad) = mesh.vertices.iter().find(|v| !v.is_finite()) {
+        if let Some(bad) = mesh.vertices.iter().find(|v| !input::within_reach(**v)) {
             return Err(Error::input(
                 format!("{at}.file"),
-                format!("vertex {bad} is not finite"),
+                input::beyond_reach(format!("vertex {bad}")),
             ));
         }
         self.transform.apply(&mut mesh.vertices);
@@ -490,7 +525,7 @@ fn copies(o: &ObjectFile, at: &str) -> Result<Vec<DAffine3>> {
             format!("{total} copies exceed the limit of {MAX_INSTANCES} instances"),
         ));
     }
-    let [dx, dy] = grid.spacing;
+    let [dx, dy] = grid.spacing.map(|l| l.0);
     let mut out = Vec::with_capacity(total as usize);
     for j in 0..ny {
         for i in 0..nx {
@@ -608,7 +643,7 @@ fn builtin_shape(shape: &ShapeFile, at: &str) -> Result<Mesh> {
         }
         ShapeFile::Sphere(o) => {
             let center = vec3(required(o.center, at, "center", &what)?);
-            let radius = required(o.radius, at, "radius", &what)?;
+            let radius = required(o.radius, at, "radius", &what)?.0;
             if !(radius > 0.0) {
                 return Err(Error::input(
                     format!("{at}.radius"),
