@@ -277,6 +277,75 @@ fn coordinates_and_extents_beyond_f32_are_refused_naming_the_key() {
 }
 
 #[test]
+fn luminaire_positions_beyond_f32_are_refused_naming_the_entry() {
+    let d = dir("positions");
+    let text = edited(
+        "type = \"luminaire\"",
+        "position = [0, 0, 2.5]",
+        "positions = [[0, 0, 2.5], [1, 0, 2.5], [0, -1e39, 2.5]]",
+    );
+    let ran = run(&d, &text, "run");
+    let message = ran.stderr.trim();
+    assert_eq!(ran.code, Some(1), "{message}");
+    assert!(
+        message.contains("s.toml: lights[4].positions[2]") && message.contains("beyond"),
+        "{message}"
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// Angles (degrees) beyond f32's range: a result, or one line naming the key.
+#[test]
+fn angles_beyond_f32_give_a_result_or_name_the_key() {
+    let d = dir("angles");
+    let cases = [
+        (
+            "type = \"spot\"",
+            "cone_deg = 30",
+            "cone_deg = 1e39",
+            "lights[1].cone_deg",
+        ),
+        (
+            "shape = \"sphere\"",
+            "scale = 1",
+            "scale = 1\nrotate_deg = [1e39, 0, 0]",
+            "",
+        ),
+        (
+            "name = \"meter\"",
+            "half_angle_deg = 5",
+            "half_angle_deg = 1e39",
+            "receivers[1].half_angle_deg",
+        ),
+        (
+            "[camera]",
+            "fov_deg = 60",
+            "fov_deg = 1e39",
+            "camera.fov_deg",
+        ),
+        (
+            "type = \"luminaire\"",
+            "multiplier = 1",
+            "multiplier = 1\nrotate_deg = 1e39",
+            "",
+        ),
+    ];
+    for (after, old, new, key) in cases {
+        let ran = run(&d, &edited(after, old, new), "render");
+        let message = ran.stderr.trim();
+        match ran.code {
+            Some(0) => assert!(key.is_empty(), "{new} was accepted"),
+            Some(1) => assert!(
+                message.lines().count() == 1 && !key.is_empty() && message.contains(key),
+                "{new}: {message}"
+            ),
+            other => panic!("{new}: {other:?} {message}"),
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
 fn coordinates_up_to_the_limit_run() {
     let d = dir("limit");
     // A floor 1e16 m from the scene's centre: the largest coordinate a scene may hold.
@@ -364,16 +433,19 @@ fn directions_of_any_finite_length_work() {
 #[test]
 fn intensities_beyond_f32_scale_the_results_exactly() {
     let d = dir("intensities");
-    let reference = floor_values(&run(&d, &edited("", "", ""), "run"));
-    // Every light's intensity times 1e40 (the directional one and the luminaire too):
+    // Every light's intensity times 1e40 (the directional one and the luminaires too):
     // the same photons carry 1e40 times the flux, so every cell is 1e40 times as bright.
-    let mut text = format!("{BASE}{LUMINAIRE}");
+    let second = "[[lights]]\ntype = \"luminaire\"\nfile = \"examp1.ies\"\nposition = [1, 1, 2.5]\nflux_lm = 1000\n";
+    let reference = format!("{BASE}{LUMINAIRE}{second}");
+    let reference = floor_values(&run(&d, &reference, "run"));
+    let mut text = format!("{BASE}{LUMINAIRE}{second}");
     for (old, new) in [
         ("intensity_cd = 100", "intensity_cd = 100e40"),
         ("intensity_cd = 200", "intensity_cd = 200e40"),
         ("luminance_cdm2 = 50", "luminance_cdm2 = 50e40"),
         ("illuminance_lx = 10", "illuminance_lx = 10e40"),
         ("multiplier = 1", "multiplier = 1e40"),
+        ("flux_lm = 1000", "flux_lm = 1000e40"),
     ] {
         assert!(text.contains(old));
         text = text.replace(old, new);
