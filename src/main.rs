@@ -11,7 +11,7 @@ use luxtally::input::one_line;
 use luxtally::limits;
 use luxtally::output::{save_summary, summary, write_atomic};
 use luxtally::render::{self, IndirectMap, MAP_FILE};
-use luxtally::run::{run_from, Observer, RunOptions, RunResult, RunState, ShardRange, Start};
+use luxtally::run::{run_from, Observer, RunOptions, RunResult, RunState};
 use luxtally::scene::{Estimator, Scene};
 use luxtally::{Error, Result};
 use progress::Progress;
@@ -398,7 +398,21 @@ fn photon_pass(
             }
         });
     }
-    let mut start = resume_start(args, scene, options, out)?;
+    let (mut start, checkpoint) = luxtally::checkpoint::resume::start(
+        scene,
+        options,
+        args.resume.as_deref(),
+        args.shard.as_deref(),
+    )?;
+    if let (Some(path), Some(dir)) = (checkpoint, &args.resume) {
+        if dir != out && !args.quiet {
+            eprintln!(
+                "resuming from {}; outputs in {}",
+                path.display(),
+                out.display()
+            );
+        }
+    }
     start.distributor = distributor;
     let shard = start.shard;
     if args.checkpoint_every.is_nan() || args.checkpoint_every <= 0.0 {
@@ -487,71 +501,6 @@ fn outputs_of(args: &RunArgs) -> Result<luxtally::output::Outputs> {
         Ok(luxtally::output::Outputs::ALL),
         luxtally::output::Outputs::parse,
     )
-}
-
-/// `--resume` and `--shard`: the checkpoint's state, checked against the scene and
-/// options, and the shard's photon range.
-fn resume_start(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> Result<Start> {
-    let mut start = Start::default();
-    let resumed = match &args.resume {
-        Some(dir) => {
-            let (c, path) = Checkpoint::load(dir)?;
-            c.check(&path, scene, options)?;
-            if options.stop.photons.is_some_and(|n| n < c.photons()) && c.shard.is_none() {
-                return Err(Error::input(
-                    "--photons",
-                    format!(
-                        "{} is fewer than the {} photons of {}",
-                        options.stop.photons.unwrap_or(0),
-                        c.photons(),
-                        path.display()
-                    ),
-                ));
-            }
-            if dir != out && !args.quiet {
-                eprintln!(
-                    "resuming from {}; outputs in {}",
-                    path.display(),
-                    out.display()
-                );
-            }
-            Some(c)
-        }
-        None => None,
-    };
-    let shard = match (&args.shard, &resumed) {
-        (Some(text), _) => {
-            if !options.stop.open_ended() {
-                return Err(Error::input(
-                    "--shard",
-                    "shards stop on --photons only (no --time-limit, --target-error, --min-hits)",
-                ));
-            }
-            let total = options
-                .stop
-                .photons
-                .ok_or_else(|| Error::input("--shard", "needs --photons"))?;
-            Some(ShardRange::parse(text, total)?)
-        }
-        (None, Some(c)) => c.shard,
-        (None, None) => None,
-    };
-    if let Some(c) = &resumed {
-        if c.shard != shard || (shard.is_some() && c.photons_goal != options.stop.photons) {
-            return Err(Error::input(
-                "--shard",
-                "differs from the checkpoint's shard or its --photons",
-            ));
-        }
-        start.resumed = Some(c.resumed().ok_or_else(|| {
-            Error::input(
-                c.scene_path.clone(),
-                "the checkpoint's cells are corrupt (they do not read back)",
-            )
-        })?);
-    }
-    start.shard = shard;
-    Ok(start)
 }
 
 /// `merge`: the shards' checkpoints folded into the outputs of the whole run.
