@@ -1,0 +1,11 @@
+//! The `bench-*` commands: ray throughput, photon throughput, time to accuracy and scale.
+
+pub mod accuracy;
+pub mod photons;
+pub mod rays;
+pub mod scale;
+
+/// Threads when `--threads` is not given.
+fn all_cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
