@@ -1,5 +1,7 @@
-//! `luxtally bench-rays`: ray throughput of every backend and ray API on a scene.
+//! `luxtally bench-rays`: ray throughput of every backend and ray API on a scene, and of
+//! Embree's C loop over the same rays when built with the feature `bench`.
 
+use super::timing::bench_rays;
 use crate::progress::Progress;
 use luxtally::{Error, Result};
 use std::path::PathBuf;
@@ -21,7 +23,7 @@ pub fn command(args: BenchRaysArgs) -> Result<()> {
         return Err(Error::input("--rays", "must be at least 1"));
     }
     let spinner = Progress::spinner();
-    let table = luxtally::bench::bench_rays(
+    let table = bench_rays(
         &scene.geometry,
         &scene.name,
         args.rays,
