@@ -65,7 +65,12 @@ pub fn procedural_mesh(min_triangles: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     // (27 M sin/cos calls at 10⁷ triangles were most of the generation's time).
     let coordinate = |i: usize| -size / 2.0 + size * i as f64 / n as f64;
     let (sin_x, cos_y): (Vec<f64>, Vec<f64>) = (0..=n)
-        .map(|i| ((0.31 * coordinate(i)).sin(), (0.23 * coordinate(i)).cos()))
+        .map(|i| {
+            (
+                libm::sin(0.31 * coordinate(i)),
+                libm::cos(0.23 * coordinate(i)),
+            )
+        })
         .unzip();
     let unit_sphere: Vec<(DVec3, f64)> = (0..sphere_vertices)
         .map(|index| {
@@ -73,12 +78,15 @@ pub fn procedural_mesh(min_triangles: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
             let theta = std::f64::consts::PI * k as f64 / rings as f64;
             let phi = std::f64::consts::TAU * s as f64 / seg as f64;
             let d = DVec3::new(
-                theta.sin() * phi.cos(),
-                theta.sin() * phi.sin(),
-                theta.cos(),
+                libm::sin(theta) * libm::cos(phi),
+                libm::sin(theta) * libm::sin(phi),
+                libm::cos(theta),
             );
             // A little displacement so no two spheres are alike.
-            (d, 1.0 + 0.05 * (5.0 * phi).sin() * (3.0 * theta).sin())
+            (
+                d,
+                1.0 + 0.05 * libm::sin(5.0 * phi) * libm::sin(3.0 * theta),
+            )
         })
         .collect();
 
@@ -89,7 +97,7 @@ pub fn procedural_mesh(min_triangles: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
             if index < field_vertices {
                 let (i, j) = (index % (n + 1), index / (n + 1));
                 let (x, y) = (coordinate(i), coordinate(j));
-                let z = 1.5 * sin_x[i] * cos_y[j] + 0.4 * (1.7 * x + 0.9 * y).sin();
+                let z = 1.5 * sin_x[i] * cos_y[j] + 0.4 * libm::sin(1.7 * x + 0.9 * y);
                 return DVec3::new(x, y, z);
             }
             let index = index - field_vertices;
@@ -145,7 +153,7 @@ fn random_dir(rng: &mut impl Rng) -> Vec3 {
     let z: f32 = rng.random_range(-1.0..1.0);
     let phi: f32 = rng.random_range(0.0..std::f32::consts::TAU);
     let r = (1.0 - z * z).max(0.0).sqrt();
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    Vec3::new(r * libm::cosf(phi), r * libm::sinf(phi), z)
 }
 
 /// `n` incoherent rays: origins uniform in the bounds, uniform unit directions,

@@ -196,7 +196,7 @@ pub fn sphere_from_square(u: f32, v: f32) -> Vec3 {
 fn around(n: DVec3, cos_t: f64, phi: f64) -> DVec3 {
     let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
     let (t, b) = basis(n);
-    (t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + n * cos_t).normalize()
+    (t * (sin_t * libm::cos(phi)) + b * (sin_t * libm::sin(phi)) + n * cos_t).normalize()
 }
 
 /// A point uniformly distributed on the disk of `radius` about `center`, normal `n`.
@@ -254,7 +254,7 @@ impl SphericalRect {
         let z2 = z0 * z0;
         let (rx0, rx1) = ((z2 + x0 * x0).sqrt(), (z2 + x1 * x1).sqrt());
         let (ry0, ry1) = ((z2 + y0 * y0).sqrt(), (z2 + y1 * y1).sqrt());
-        let angle = |c: f64| c.clamp(-1.0, 1.0).acos();
+        let angle = |c: f64| libm::acos(c.clamp(-1.0, 1.0));
         let g0 = angle(x1 * y0 / (ry0 * rx1));
         let g1 = angle(-x1 * y1 / (rx1 * ry1));
         let g2 = angle(x0 * y1 / (rx0 * ry1));
@@ -284,7 +284,7 @@ impl SphericalRect {
     /// directions uniform over the solid angle, and strata of (u, v) strata of it.
     pub fn sample(&self, u: f64, v: f64) -> DVec3 {
         let au = u * self.solid_angle_sr + self.k;
-        let fu = (au.cos() * self.b0 - self.b1) / au.sin();
+        let fu = (libm::cos(au) * self.b0 - self.b1) / libm::sin(au);
         let cu = (1.0 / (fu * fu + self.b0 * self.b0).sqrt())
             .copysign(fu)
             .clamp(-1.0 + 1e-15, 1.0 - 1e-15);
@@ -389,7 +389,7 @@ mod tests {
 
     /// The azimuth of (x, y) as a fraction of a turn, in [0, 1].
     fn turn(x: f64, y: f64) -> f64 {
-        y.atan2(x) / std::f64::consts::TAU + 0.5
+        libm::atan2(y, x) / std::f64::consts::TAU + 0.5
     }
 
     #[test]
@@ -538,13 +538,13 @@ mod tests {
             let t = std::f64::consts::FRAC_PI_4 * k as f64 / 1000.0;
             let (c, s) = cos_sin_quarter(t);
             assert!(
-                (c - t.cos()).abs() < 1e-11 && (s - t.sin()).abs() < 1e-11,
+                (c - libm::cos(t)).abs() < 1e-11 && (s - libm::sin(t)).abs() < 1e-11,
                 "{t}"
             );
             let (c, s) = cos_sin_quarter_f32(t as f32);
             let (c, s) = (c as f64, s as f64);
             assert!(
-                (c - t.cos()).abs() < 3e-7 && (s - t.sin()).abs() < 3e-7,
+                (c - libm::cos(t)).abs() < 3e-7 && (s - libm::sin(t)).abs() < 3e-7,
                 "{t}"
             );
         }
@@ -574,7 +574,7 @@ mod tests {
             .map(|i| {
                 let (a, b) = (corners[i] - p, corners[(i + 1) % 4] - p);
                 let c = a.cross(b);
-                a.normalize().dot(b.normalize()).acos() * c.z / c.length()
+                libm::acos(a.normalize().dot(b.normalize())) * c.z / c.length()
             })
             .sum::<f64>()
             .abs()

@@ -66,7 +66,7 @@ fn solid_angle(a: glam::DVec3, b: glam::DVec3, c: glam::DVec3) -> f64 {
     let (la, lb, lc) = (a.length(), b.length(), c.length());
     let num = a.dot(b.cross(c)).abs();
     let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-    2.0 * num.atan2(den)
+    2.0 * libm::atan2(num, den)
 }
 
 #[test]

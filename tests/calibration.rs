@@ -309,7 +309,7 @@ fn solid_angle(a: glam::DVec3, b: glam::DVec3, c: glam::DVec3) -> f64 {
     let (la, lb, lc) = (a.length(), b.length(), c.length());
     let num = a.dot(b.cross(c)).abs();
     let den = la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la;
-    2.0 * num.atan2(den)
+    2.0 * libm::atan2(num, den)
 }
 
 /// Mean illuminance over the part of the square `cell` = [x0, x1] × [y0, y1] (plane z = 0) where
@@ -348,7 +348,7 @@ fn shadow_exact(i: usize, j: usize) -> f64 {
         1000.0,
         1.9999,
         [x0, x0 + w, y0, y0 + w],
-        (a.cos(), a.sin()),
+        (libm::cos(a), libm::sin(a)),
         SHADOW_C,
     )
 }

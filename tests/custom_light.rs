@@ -32,7 +32,8 @@ impl Ring {
         (0..self.count)
             .map(|k| {
                 let phi = 2.0 * PI * k as f64 / self.count as f64;
-                self.center - shift + self.radius_m * DVec3::new(phi.cos(), phi.sin(), 0.0)
+                self.center - shift
+                    + self.radius_m * DVec3::new(libm::cos(phi), libm::sin(phi), 0.0)
             })
             .collect()
     }
@@ -67,7 +68,10 @@ impl Emitter for RingEmitter {
         let z = 1.0 - 2.0 * u;
         let s = (1.0 - z * z).max(0.0).sqrt();
         let phi = 2.0 * PI * v;
-        (self.points[k], DVec3::new(s * phi.cos(), s * phi.sin(), z))
+        (
+            self.points[k],
+            DVec3::new(s * libm::cos(phi), s * libm::sin(phi), z),
+        )
     }
 
     /// Every emitter of the ring, each as I/d² towards `p`.

@@ -26,7 +26,7 @@ fn polygon_lx(p: DVec3, n: DVec3, polygon: &[DVec3]) -> f64 {
         let cross = ra.cross(rb);
         let len = cross.length();
         if len > 0.0 {
-            let angle = ra.normalize().dot(rb.normalize()).clamp(-1.0, 1.0).acos();
+            let angle = libm::acos(ra.normalize().dot(rb.normalize()).clamp(-1.0, 1.0));
             sum += angle * n.dot(cross) / len;
         }
     }
@@ -309,11 +309,11 @@ fn spot_cone_edge_cells_are_calibrated_and_dark_cells_unknown() {
         400_000,
     );
     let r = &s.receivers["r"];
-    let cos_cone = 30f64.to_radians().cos();
+    let cos_cone = libm::cos(30f64.to_radians());
     let e = |x: f64, y: f64| {
         let d2 = 4.0 + x * x + y * y;
         if 2.0 / d2.sqrt() >= cos_cone {
-            2000.0 * 2.0 / d2.powf(1.5)
+            2000.0 * 2.0 / libm::pow(d2, 1.5)
         } else {
             0.0
         }
@@ -546,15 +546,15 @@ fn cells_a_cone_edge_crosses_are_refined_and_no_others() {
     use luxtally::trace::direct::EDGE_REFINEMENT;
     let (sides, base) = cell_sides(&spot_over_black_floor());
     // Radius on the receiver (1.9999 m under the spot) at which the axis angle is `deg`.
-    let radius = |deg: f64| (2.0 - 0.0001) * deg.to_radians().tan();
+    let radius = |deg: f64| (2.0 - 0.0001) * libm::tan(deg.to_radians());
     let w = 3.0 / 16.0;
     let mut refined = 0;
     for (k, &side) in sides.iter().enumerate() {
         let (x0, y0) = (-1.5 + (k % 16) as f64 * w, -1.5 + (k / 16) as f64 * w);
         let nearest = |lo: f64| (0.0f64).clamp(lo, lo + w);
         let farthest = |lo: f64| lo.abs().max((lo + w).abs());
-        let r_min = nearest(x0).hypot(nearest(y0));
-        let r_max = farthest(x0).hypot(farthest(y0));
+        let r_min = libm::hypot(nearest(x0), nearest(y0));
+        let r_max = libm::hypot(farthest(x0), farthest(y0));
         if r_max < radius(29.0) || r_min > radius(31.0) {
             assert_eq!(
                 side, base,
@@ -591,7 +591,7 @@ fn cells_a_shadow_edge_crosses_are_refined_and_no_others() {
             // Signed distance of each corner past the edge (lit where positive).
             let past: Vec<f64> = [(0.0, 0.0), (wx, 0.0), (0.0, wy), (wx, wy)]
                 .iter()
-                .map(|(dx, dy)| a.cos() * (x0 + dx) + a.sin() * (y0 + dy) - SHADOW_C)
+                .map(|(dx, dy)| libm::cos(a) * (x0 + dx) + libm::sin(a) * (y0 + dy) - SHADOW_C)
                 .collect();
             let lo = past.iter().copied().fold(f64::INFINITY, f64::min);
             let hi = past.iter().copied().fold(f64::NEG_INFINITY, f64::max);

@@ -273,7 +273,7 @@ fn assert_estimators_agree(
         ("track", "next_event")
     );
     let z: Vec<f64> = (0..a.values.len())
-        .map(|k| (a.values[k] - b.values[k]) / a.sigma[k].hypot(b.sigma[k]))
+        .map(|k| (a.values[k] - b.values[k]) / libm::hypot(a.sigma[k], b.sigma[k]))
         .collect();
     let r = rms(&z);
     eprintln!(

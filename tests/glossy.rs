@@ -28,7 +28,11 @@ fn material(glossy_r: f64, glossy_t: f64, roughness: f64) -> Material {
 
 fn direction(theta_deg: f64, phi_deg: f64) -> DVec3 {
     let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
-    DVec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
+    DVec3::new(
+        libm::sin(t) * libm::cos(p),
+        libm::sin(t) * libm::sin(p),
+        libm::cos(t),
+    )
 }
 
 /// ∫ g(ω) dω over the whole sphere by jittered stratification: an n × 2n grid of equal
@@ -47,7 +51,7 @@ fn sphere_integral(n: usize, g: impl Fn(DVec3) -> f64) -> (f64, f64) {
                     let mu = -1.0 + 2.0 * (i as f64 + rng.random::<f64>()) / n as f64;
                     let phi = PI * (j as f64 + rng.random::<f64>()) / n as f64;
                     let s = (1.0 - mu * mu).max(0.0).sqrt();
-                    sum += g(DVec3::new(s * phi.cos(), s * phi.sin(), mu));
+                    sum += g(DVec3::new(s * libm::cos(phi), s * libm::sin(phi), mu));
                 }
             }
             4.0 * PI * sum / cells
@@ -144,11 +148,11 @@ fn check_lobe(m: &Material, theta_deg: f64) -> f64 {
         m.roughness
     );
     assert!(
-        (albedo - mean).abs() <= 4.0 * sigma.hypot(q_err),
+        (albedo - mean).abs() <= 4.0 * libm::hypot(sigma, q_err),
         "albedo {albedo} vs sampled {mean} ± {sigma}"
     );
     assert!(
-        (pdf_mass - fraction).abs() <= 4.0 * f_sigma.hypot(p_err),
+        (pdf_mass - fraction).abs() <= 4.0 * libm::hypot(f_sigma, p_err),
         "pdf mass {pdf_mass} vs returned fraction {fraction} ± {f_sigma}"
     );
     albedo
@@ -264,7 +268,7 @@ fn furnace(reflectance: f64, glossy: f64, roughness: f64, photons: u64) {
     let flux = 4.0 * PI * 100.0;
     let g = &s.global;
     let exact = flux * hits / g.area_m2;
-    let sigma = g.mean_sigma_lx.hypot(flux * hits_sigma / g.area_m2);
+    let sigma = libm::hypot(g.mean_sigma_lx, flux * hits_sigma / g.area_m2);
     eprintln!(
         "furnace ρ {reflectance} glossy {glossy} roughness {roughness}: mean {} vs {exact} (σ {sigma}), ρ_eff {}",
         g.mean_illuminance_lx,
@@ -411,7 +415,7 @@ fn glossy_floor_luminance(estimator: Estimator, photons: u64) {
         estimator,
     );
     let b = Bsdf::new(&floor);
-    let cos_half = 30f64.to_radians().cos();
+    let cos_half = libm::cos(30f64.to_radians());
     let omega = 2.0 * PI * (1.0 - cos_half);
     let g = gauss8();
     let cone_mean = |x: f64, y: f64| -> f64 {
@@ -426,7 +430,7 @@ fn glossy_floor_luminance(estimator: Estimator, photons: u64) {
             let sin = (1.0 - cos * cos).sqrt();
             for j in 0..32 {
                 let phi = (j as f64 + 0.5) * 2.0 * PI / 32.0;
-                let wo = DVec3::new(sin * phi.cos(), sin * phi.sin(), cos);
+                let wo = DVec3::new(sin * libm::cos(phi), sin * libm::sin(phi), cos);
                 sum += w * (1.0 - cos_half) * (2.0 * PI / 32.0) * b.f(wo, wi, DVec3::Z);
             }
         }
@@ -465,7 +469,7 @@ fn assert_estimators_agree(
     let next = run_options(scene, &with(Estimator::NextEvent, next_event_photons));
     let (a, b) = (&track.receivers[receiver], &next.receivers[receiver]);
     let z: Vec<f64> = (0..a.values.len())
-        .map(|k| (a.values[k] - b.values[k]) / a.sigma[k].hypot(b.sigma[k]))
+        .map(|k| (a.values[k] - b.values[k]) / libm::hypot(a.sigma[k], b.sigma[k]))
         .collect();
     let r = rms(&z);
     eprintln!(
@@ -494,7 +498,7 @@ fn pixel_ray(c: &Camera, x: usize, y: usize) -> (DVec3, DVec3) {
     let forward = (c.look_at - c.position).normalize();
     let right = forward.cross(c.up).normalize();
     let up = right.cross(forward);
-    let t = (0.5 * c.fov_deg.to_radians()).tan();
+    let t = libm::tan(0.5 * c.fov_deg.to_radians());
     let sx = (2.0 * (x as f64 + 0.5) / w - 1.0) * t * w / h;
     let sy = (1.0 - 2.0 * (y as f64 + 0.5) / h) * t;
     (c.position, (forward + right * sx + up * sy).normalize())

@@ -39,7 +39,7 @@ fn quad_flux(p: &Photometry, c0: f64, c1: f64, g0: f64, g1: f64) -> f64 {
     for (sc, wc) in g {
         for (sg, wg) in g {
             let (c, gamma) = (c0 + sc * (c1 - c0), g0 + sg * (g1 - g0));
-            sum += wc * wg * p.intensity_cd(c, gamma) * gamma.to_radians().sin();
+            sum += wc * wg * p.intensity_cd(c, gamma) * libm::sin(gamma.to_radians());
         }
     }
     sum * dc * dg
@@ -184,7 +184,7 @@ fn examp1_sampled_directions_reproduce_the_table() {
 fn cosine_interpolant_flux(i0: f64, h_deg: f64) -> f64 {
     let f = |g: f64| {
         if g <= 90.0 {
-            i0 * g.to_radians().cos()
+            i0 * libm::cos(g.to_radians())
         } else {
             0.0
         }
@@ -195,7 +195,7 @@ fn cosine_interpolant_flux(i0: f64, h_deg: f64) -> f64 {
         for (s, wt) in gauss8() {
             let g = a + s * (b - a);
             let l = f(a) + s * (f(b) - f(a));
-            sum += wt * l * g.to_radians().sin() * (b - a).to_radians();
+            sum += wt * l * libm::sin(g.to_radians()) * (b - a).to_radians();
         }
     }
     2.0 * PI * sum
@@ -266,7 +266,7 @@ fn lobe_in_the_c90_plane_sends_every_direction_to_plus_y() {
         let d = p.sample_direction(&mut rng);
         // Planes C 80–100 at γ 30–70 only.
         assert!(
-            d.y > 0.0 && d.x.abs() <= d.y * 10f64.to_radians().tan() + 1e-12,
+            d.y > 0.0 && d.x.abs() <= d.y * libm::tan(10f64.to_radians()) + 1e-12,
             "{d}"
         );
         let (c, g) = c_gamma_deg(d);
@@ -391,8 +391,8 @@ fn every_symmetry_form_expands_to_the_same_intensity_function() {
             "quadrant",
             |c, g| {
                 100.0
-                    + 60.0 * (2.0 * c).to_radians().cos() * (g / 2.0).to_radians().sin()
-                    + 30.0 * (4.0 * c).to_radians().cos()
+                    + 60.0 * libm::cos((2.0 * c).to_radians()) * libm::sin((g / 2.0).to_radians())
+                    + 30.0 * libm::cos((4.0 * c).to_radians())
             },
             vec![
                 (0.0, 90.0, Symmetry::Quadrant),
@@ -405,8 +405,8 @@ fn every_symmetry_form_expands_to_the_same_intensity_function() {
             "bilateral C0–C180",
             |c, g| {
                 100.0
-                    + 40.0 * c.to_radians().cos() * g.to_radians().sin()
-                    + 20.0 * (2.0 * c).to_radians().cos()
+                    + 40.0 * libm::cos(c.to_radians()) * libm::sin(g.to_radians())
+                    + 20.0 * libm::cos((2.0 * c).to_radians())
             },
             vec![(0.0, 180.0, Symmetry::BilateralC0C180)],
             vec![2, 0],
@@ -415,15 +415,15 @@ fn every_symmetry_form_expands_to_the_same_intensity_function() {
             "bilateral C90–C270",
             |c, g| {
                 100.0
-                    + 40.0 * c.to_radians().sin() * g.to_radians().sin()
-                    + 20.0 * (2.0 * c).to_radians().cos()
+                    + 40.0 * libm::sin(c.to_radians()) * libm::sin(g.to_radians())
+                    + 20.0 * libm::cos((2.0 * c).to_radians())
             },
             vec![(90.0, 270.0, Symmetry::BilateralC90C270)],
             vec![3, 0],
         ),
         (
             "rotational",
-            |_, g| 100.0 + 50.0 * g.to_radians().cos(),
+            |_, g| 100.0 + 50.0 * libm::cos(g.to_radians()),
             vec![
                 (0.0, 0.0, Symmetry::Rotational),
                 (0.0, 90.0, Symmetry::Quadrant),
@@ -436,8 +436,8 @@ fn every_symmetry_form_expands_to_the_same_intensity_function() {
             "asymmetric",
             |c, g| {
                 100.0
-                    + 40.0 * c.to_radians().sin() * g.to_radians().sin()
-                    + 30.0 * c.to_radians().cos() * g.to_radians().cos()
+                    + 40.0 * libm::sin(c.to_radians()) * libm::sin(g.to_radians())
+                    + 30.0 * libm::cos(c.to_radians()) * libm::cos(g.to_radians())
             },
             vec![],
             vec![0],
@@ -477,7 +477,7 @@ fn every_symmetry_form_expands_to_the_same_intensity_function() {
 #[test]
 fn a_last_plane_short_of_360_wraps_to_c0() {
     let gamma = steps(0.0, 180.0, 10.0);
-    let f = |c: f64, g: f64| 100.0 + 40.0 * c.to_radians().sin() * g.to_radians().sin();
+    let f = |c: f64, g: f64| 100.0 + 40.0 * libm::sin(c.to_radians()) * libm::sin(g.to_radians());
     let reference = parse_ies(&ies_text(&steps(0.0, 360.0, 15.0), &gamma, &f), "full.ies");
     let short = parse_ies(&ies_text(&steps(0.0, 345.0, 15.0), &gamma, &f), "short.ies");
     assert_same_function(&reference, &short, "0–345 against 0–360");

@@ -61,8 +61,11 @@ fn lambertian_square_emitter_matches_view_factor(estimator: Estimator, photons: 
     // The formula itself: straight below the centre of a square of side 2a at height h.
     let centre = point_lx(0.0, 0.0);
     let a: f64 = 0.5;
-    let exact_centre =
-        2.0 * luminance * (a / (a * a + h * h).sqrt()) * 2.0 * (a / (a * a + h * h).sqrt()).atan();
+    let exact_centre = 2.0
+        * luminance
+        * (a / (a * a + h * h).sqrt())
+        * 2.0
+        * libm::atan(a / (a * a + h * h).sqrt());
     assert!(
         (centre - exact_centre).abs() < 1e-9 * exact_centre,
         "{centre} vs {exact_centre}"

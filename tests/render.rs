@@ -28,7 +28,7 @@ fn pixel_ray(c: &Camera, x: usize, y: usize) -> (DVec3, DVec3) {
     let forward = (c.look_at - c.position).normalize();
     let right = forward.cross(c.up).normalize();
     let up = right.cross(forward);
-    let t = (0.5 * c.fov_deg.to_radians()).tan();
+    let t = libm::tan(0.5 * c.fov_deg.to_radians());
     let sx = (2.0 * (x as f64 + 0.5) / w - 1.0) * t * w / h;
     let sy = (1.0 - 2.0 * (y as f64 + 0.5) / h) * t;
     (c.position, (forward + right * sx + up * sy).normalize())

@@ -102,6 +102,18 @@ impl<'a> Mesh<'a> {
     }
 }
 
+/// `LUXTALLY_EMBREE_CONFIG` (e.g. `max_isa=sse4.2`) joins the device configuration: it
+/// lets tests and diagnosis pick Embree's kernels, which Embree otherwise picks by CPU.
+pub const CONFIG_VAR: &str = "LUXTALLY_EMBREE_CONFIG";
+
+fn device_config(config: &str) -> String {
+    match std::env::var(CONFIG_VAR) {
+        Ok(extra) if !extra.is_empty() && !config.is_empty() => format!("{config},{extra}"),
+        Ok(extra) if !extra.is_empty() => extra,
+        _ => config.to_string(),
+    }
+}
+
 /// A committed Embree scene over one `Geometry`.
 pub struct EmbreeScene {
     device: sys::RTCDevice,
@@ -155,6 +167,7 @@ impl EmbreeScene {
                 "triangle {k} has vertex indices {tri:?} but the mesh has {nverts} vertices"
             )));
         }
+        let config = device_config(config);
         let config = CString::new(config)
             .map_err(|_| Error::Embree("device config contains a NUL byte".into()))?;
         let triangles = geometry.triangles.len() + geometry.instanced.stored_triangle_count();

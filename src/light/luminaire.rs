@@ -68,7 +68,7 @@ impl LightFile for LuminaireFile {
         // factor at that angle relative to it.
         let tilt = match &photometry.tilt {
             Some(t) if t.factor(0.0) > 0.0 => {
-                t.factor(aim.dot(-DVec3::Z).clamp(-1.0, 1.0).acos().to_degrees()) / t.factor(0.0)
+                t.factor(libm::acos(aim.dot(-DVec3::Z).clamp(-1.0, 1.0)).to_degrees()) / t.factor(0.0)
             }
             _ => 1.0,
         };

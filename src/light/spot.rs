@@ -97,8 +97,8 @@ pub fn spot_profile(cos_theta: f64, cos_cone: f64, cos_falloff: f64) -> f64 {
 impl Light for Spot {
     fn flux_lm(&self, _: &BoundingSphere) -> f64 {
         let (cos_cone, cos_falloff) = (
-            self.cone_deg.to_radians().cos(),
-            self.falloff_deg.to_radians().cos(),
+            libm::cos(self.cone_deg.to_radians()),
+            libm::cos(self.falloff_deg.to_radians()),
         );
         // ∫ I dω: full core, plus the smoothstep ramp whose mean over cos θ is 1/2.
         TAU * self.intensity_cd * ((1.0 - cos_falloff) + 0.5 * (cos_falloff - cos_cone))
@@ -108,8 +108,8 @@ impl Light for Spot {
         Arc::new(SpotEmitter {
             position: self.position - origin,
             axis: self.direction.normalize(),
-            cos_cone: self.cone_deg.to_radians().cos(),
-            cos_falloff: self.falloff_deg.to_radians().cos(),
+            cos_cone: libm::cos(self.cone_deg.to_radians()),
+            cos_falloff: libm::cos(self.falloff_deg.to_radians()),
             intensity_cd: self.intensity_cd,
         })
     }
@@ -166,7 +166,7 @@ mod tests {
             cone_deg: cone,
             falloff_deg: falloff,
         };
-        let (cc, cf) = (cone.to_radians().cos(), falloff.to_radians().cos());
+        let (cc, cf) = (libm::cos(cone.to_radians()), libm::cos(falloff.to_radians()));
         let n = 100_000;
         let numeric: f64 = (0..n)
             .map(|k| {

@@ -185,7 +185,7 @@ pub fn format_number(v: f64) -> String {
     if !(1e-3..1e5).contains(&a) {
         return format!("{v:.2e}");
     }
-    let decimals = (2 - a.log10().floor() as i32).max(0) as usize;
+    let decimals = (2 - libm::log10(a).floor() as i32).max(0) as usize;
     let s = format!("{v:.decimals$}");
     if s.contains('.') {
         s.trim_end_matches('0').trim_end_matches('.').to_string()

@@ -51,8 +51,8 @@ pub const TYPE_A: Axes = Axes {
 impl Axes {
     /// The unit direction at plane angle `phi_deg`, polar angle `theta_deg`.
     pub fn direction(&self, phi_deg: f64, theta_deg: f64) -> DVec3 {
-        let (st, ct) = theta_deg.to_radians().sin_cos();
-        let (sp, cp) = phi_deg.to_radians().sin_cos();
+        let (st, ct) = libm::sincos(theta_deg.to_radians());
+        let (sp, cp) = libm::sincos(phi_deg.to_radians());
         ct * self.pole + st * (cp * self.zero + sp * self.ninety)
     }
 
@@ -65,8 +65,8 @@ impl Axes {
         } else {
             1.0
         };
-        let theta = c.acos().to_degrees();
-        let mut phi = dir.dot(self.ninety).atan2(dir.dot(self.zero)).to_degrees();
+        let theta = libm::acos(c).to_degrees();
+        let mut phi = libm::atan2(dir.dot(self.ninety), dir.dot(self.zero)).to_degrees();
         if self.periodic && phi < 0.0 {
             phi += 360.0;
             // -tiny + 360 rounds to 360, which is the same plane as 0.
@@ -178,16 +178,16 @@ impl Grid {
 pub fn polar_weights(a: f64, b: f64) -> (f64, f64) {
     let h = b - a;
     let m = 0.5 * (a + b);
-    let sh = (0.5 * h).sin();
+    let sh = libm::sin(0.5 * h);
     // cos a − cos b and sin b − sin a without cancellation.
-    let dcos = 2.0 * m.sin() * sh;
-    let dsin = 2.0 * m.cos() * sh;
+    let dcos = 2.0 * libm::sin(m) * sh;
+    let dsin = 2.0 * libm::cos(m) * sh;
     // ∫ s sin θ dθ = −cos b + (sin b − sin a)/h, and ∫ sin θ dθ = cos a − cos b.
     let w1 = if h > 1e-4 {
-        dsin / h - b.cos()
+        dsin / h - libm::cos(b)
     } else {
         // Series of the same in h (the two terms above cancel to O(h)).
-        let (sb, cb) = b.sin_cos();
+        let (sb, cb) = libm::sincos(b);
         h * (0.5 * sb - h * cb / 6.0 - h * h * sb / 24.0)
     };
     (dcos - w1, w1)
@@ -210,8 +210,8 @@ mod tests {
             for k in 0..n {
                 let s = (k as f64 + 0.5) / n as f64;
                 let t = a + s * (b - a);
-                q0 += (1.0 - s) * t.sin() * (b - a) / n as f64;
-                q1 += s * t.sin() * (b - a) / n as f64;
+                q0 += (1.0 - s) * libm::sin(t) * (b - a) / n as f64;
+                q1 += s * libm::sin(t) * (b - a) / n as f64;
             }
             let (w0, w1) = polar_weights(a, b);
             assert!((w0 - q0).abs() < 1e-8 * (b - a), "{a} {b}: {w0} vs {q0}");

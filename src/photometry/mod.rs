@@ -129,7 +129,7 @@ impl Opening {
     pub fn diagonal_m(&self) -> f64 {
         match *self {
             Opening::Point => 0.0,
-            Opening::Rectangle { length_m, width_m } => length_m.hypot(width_m),
+            Opening::Rectangle { length_m, width_m } => libm::hypot(length_m, width_m),
             Opening::Disc { diameter_m } => diameter_m,
             Opening::Ellipse { length_m, width_m } => length_m.max(width_m),
         }
@@ -178,7 +178,11 @@ fn concentric(u: f64, v: f64, a: f64, b: f64) -> DVec3 {
             std::f64::consts::FRAC_PI_2 - std::f64::consts::FRAC_PI_4 * (x / y),
         )
     };
-    DVec3::new(0.5 * a * r * phi.cos(), 0.5 * b * r * phi.sin(), 0.0)
+    DVec3::new(
+        0.5 * a * r * libm::cos(phi),
+        0.5 * b * r * libm::sin(phi),
+        0.0,
+    )
 }
 
 /// Uniform in the ellipse of axes `a` (x) and `b` (y), by rejection from the square.

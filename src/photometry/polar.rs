@@ -74,7 +74,7 @@ pub fn ring_step(max: f64) -> f64 {
         return 1.0;
     }
     let raw = max / 4.0;
-    let decade = 10f64.powf(raw.log10().floor());
+    let decade = libm::pow(10f64, libm::log10(raw).floor());
     [1.0, 2.0, 2.5, 5.0, 10.0]
         .iter()
         .map(|m| m * decade)
@@ -133,7 +133,7 @@ impl Canvas {
 
 /// Screen point of intensity `r` (fraction of the outer ring) at γ, right or left half.
 fn point(r: f64, gamma_deg: f64, right: bool) -> (f64, f64) {
-    let (s, c) = gamma_deg.to_radians().sin_cos();
+    let (s, c) = libm::sincos(gamma_deg.to_radians());
     let side = if right { 1.0 } else { -1.0 };
     (CENTRE.0 + side * RADIUS * r * s, CENTRE.1 + RADIUS * r * c)
 }

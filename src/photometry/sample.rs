@@ -101,8 +101,8 @@ impl Sampler {
                     dphi_rad: (grid.phi_deg[i + 1] - grid.phi_deg[i]).to_radians(),
                     theta0_rad: t0,
                     dtheta_rad: t1 - t0,
-                    cos0: t0.cos(),
-                    cos1: t1.cos(),
+                    cos0: libm::cos(t0),
+                    cos1: libm::cos(t1),
                     corner_cd,
                     max_cd: corner_cd.iter().copied().fold(0.0, f64::max),
                 });
@@ -125,7 +125,7 @@ impl Sampler {
         loop {
             let t = uniform(rng);
             let cos_theta = c.cos0 - uniform(rng) * (c.cos0 - c.cos1);
-            let theta = cos_theta.clamp(-1.0, 1.0).acos();
+            let theta = libm::acos(cos_theta.clamp(-1.0, 1.0));
             let s = ((theta - c.theta0_rad) / c.dtheta_rad).clamp(0.0, 1.0);
             let [i00, i01, i10, i11] = c.corner_cd;
             let lo = i00 + s * (i01 - i00);
@@ -142,7 +142,7 @@ impl Sampler {
     #[inline]
     pub fn sample_direction(&self, grid: &Grid, rng: &mut Pcg32) -> DVec3 {
         let (phi, _, cos_theta, sin_theta) = self.sample_rad(rng);
-        let (sp, cp) = phi.sin_cos();
+        let (sp, cp) = libm::sincos(phi);
         let a = &grid.axes;
         (cos_theta * a.pole + sin_theta * (cp * a.zero + sp * a.ninety)).normalize()
     }

@@ -61,7 +61,7 @@ impl Pinhole {
             forward,
             right,
             up: right.cross(forward),
-            tan_half: (0.5 * c.fov_deg.to_radians()).tan(),
+            tan_half: libm::tan(0.5 * c.fov_deg.to_radians()),
             aspect: c.resolution[0] as f64 / c.resolution[1] as f64,
         }
     }

@@ -34,7 +34,7 @@ pub fn log_average_cdm2(l: &[f64]) -> f64 {
     if lit.is_empty() {
         return 0.0;
     }
-    (lit.iter().map(|x| (1e-4 + x).ln()).sum::<f64>() / lit.len() as f64).exp()
+    libm::exp(lit.iter().map(|x| libm::log(1e-4 + x)).sum::<f64>() / lit.len() as f64)
 }
 
 /// The `q` quantile of the positive (lit) luminances, 0 if none.
@@ -48,7 +48,7 @@ fn srgb(c: f64) -> u8 {
     let v = if c <= 0.003_130_8 {
         12.92 * c
     } else {
-        1.055 * c.powf(1.0 / 2.4) - 0.055
+        1.055 * libm::pow(c, 1.0 / 2.4) - 0.055
     };
     (v * 255.0).round() as u8
 }
@@ -108,7 +108,7 @@ pub fn false_colour_range(l: &[f64]) -> (i32, i32) {
     if top <= 0.0 {
         return (-3, 0);
     }
-    let mut hi = (top.log10().floor() as i32) * 3;
+    let mut hi = (libm::log10(top).floor() as i32) * 3;
     while nice(hi) < top {
         hi += 1;
     }
@@ -141,8 +141,8 @@ pub fn write_false_colour_png(image: &Image, path: &Path) -> Result<()> {
     let height = h.max(160);
     let mut rgb = vec![0u8; 3 * width * height];
     let (lo, hi) = false_colour_range(&image.luminance_cdm2);
-    let (log_lo, log_hi) = (nice(lo).log10(), nice(hi).log10());
-    let position = |l: f64| (l.log10() - log_lo) / (log_hi - log_lo);
+    let (log_lo, log_hi) = (libm::log10(nice(lo)), libm::log10(nice(hi)));
+    let position = |l: f64| (libm::log10(l) - log_lo) / (log_hi - log_lo);
     for y in 0..h {
         for x in 0..w {
             let l = image.luminance_cdm2[y * w + x];

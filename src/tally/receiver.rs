@@ -64,7 +64,7 @@ impl ReceiverGrid {
                 view_direction,
                 half_angle_deg,
             } => {
-                let cos_half_angle = half_angle_deg.to_radians().cos();
+                let cos_half_angle = libm::cos(half_angle_deg.to_radians());
                 Kind::Luminance {
                     towards_meter: -view_direction.normalize(),
                     cos_half_angle,
@@ -87,7 +87,10 @@ impl ReceiverGrid {
             first_cell,
             estimator,
             connections: connections_for(r.cell_count()),
-            near_zone_m: (r.u.length() / r.cells[0] as f64).hypot(r.v.length() / r.cells[1] as f64),
+            near_zone_m: libm::hypot(
+                r.u.length() / r.cells[0] as f64,
+                r.v.length() / r.cells[1] as f64,
+            ),
         }
     }
 

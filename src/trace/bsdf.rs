@@ -785,7 +785,7 @@ pub fn ggx_sample_visible(wo: DVec3, alpha: f64, u: [f64; 2]) -> DVec3 {
     let t2 = wh.cross(t1);
     let r = u[0].sqrt();
     let phi = 2.0 * PI * u[1];
-    let (px, mut py) = (r * phi.cos(), r * phi.sin());
+    let (px, mut py) = (r * libm::cos(phi), r * libm::sin(phi));
     let h = (1.0 - px * px).max(0.0).sqrt();
     let s = 0.5 * (1.0 + wh.z);
     py = (1.0 - s) * h + s * py;

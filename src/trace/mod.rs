@@ -53,7 +53,7 @@ pub const MAX_BOUNCE_CAP: u32 = 1 << 21;
 /// [`MAX_BOUNCE_CAP`] (the cap for ρ_max = 1).
 pub fn bounce_cap(max_albedo: f64) -> u32 {
     if max_albedo < 1.0 {
-        let n = (BOUNCE_CAP_BIAS.ln() / max_albedo.max(1e-300).ln()).ceil();
+        let n = (libm::log(BOUNCE_CAP_BIAS) / libm::log(max_albedo.max(1e-300))).ceil();
         n.clamp(64.0, MAX_BOUNCE_CAP as f64) as u32
     } else {
         MAX_BOUNCE_CAP
@@ -64,7 +64,7 @@ pub fn bounce_cap(max_albedo: f64) -> u32 {
 /// scene's highest albedo ρ_max < 1: ρ_max^cap (docs/method.md, *Bounce cap*); `None`
 /// for lossless materials (ρ_max ≥ 1), where no a-priori bound exists.
 pub fn bounce_cap_a_priori_bound(max_albedo: f64, cap: u32) -> Option<f64> {
-    (max_albedo < 1.0).then(|| (cap as f64 * max_albedo.max(0.0).ln()).exp())
+    (max_albedo < 1.0).then(|| libm::exp(cap as f64 * libm::log(max_albedo.max(0.0))))
 }
 
 /// −ln 0.05: no photon of N stopped by the cap bounds the chance that one is by
@@ -871,10 +871,10 @@ mod tests {
             let bound = bounce_cap_a_priori_bound(rho, cap).unwrap();
             assert!(bound <= BOUNCE_CAP_BIAS * (1.0 + 1e-9), "ρ {rho}: {bound}");
             assert!(
-                rho.powf(cap as f64 - 1.0) > BOUNCE_CAP_BIAS,
+                libm::pow(rho, cap as f64 - 1.0) > BOUNCE_CAP_BIAS,
                 "ρ {rho}: not the least"
             );
-            assert!((bound - rho.powf(cap as f64)).abs() <= 1e-9 * bound);
+            assert!((bound - libm::pow(rho, cap as f64)).abs() <= 1e-9 * bound);
         }
         assert_eq!(bounce_cap(0.99995), 552_607);
         assert!(bounce_cap(0.99995) > 100_000);
@@ -882,7 +882,7 @@ mod tests {
         let rho = 1.0 - 1e-7;
         assert_eq!(bounce_cap(rho), MAX_BOUNCE_CAP);
         let b = bounce_cap_a_priori_bound(rho, MAX_BOUNCE_CAP).unwrap();
-        assert!((b - (-0.2097152f64).exp()).abs() < 1e-6, "{b}");
+        assert!((b - libm::exp(-0.2097152f64)).abs() < 1e-6, "{b}");
     }
 
     #[test]
@@ -893,7 +893,7 @@ mod tests {
         // … else −ln(0.05)/N, which bounds 1 − 0.05^(1/N), the exact 95 % bound.
         let b = bounce_cap_bias_bound(None, 0, 1000).unwrap();
         assert!((b - 2.995_732_273_553_991e-3).abs() < 1e-15);
-        assert!(1.0 - 0.05f64.powf(1.0 / 1000.0) <= b);
+        assert!(1.0 - libm::pow(0.05f64, 1.0 / 1000.0) <= b);
         // A priori: kept whatever was capped; the smaller one when none was.
         assert_eq!(bounce_cap_bias_bound(Some(1e-12), 3, 1000), Some(1e-12));
         assert_eq!(bounce_cap_bias_bound(Some(0.5), 0, 1000), Some(b));

@@ -118,7 +118,7 @@ pub fn assert_calibrated(z: &[f64], what: &str) {
 /// ∫∫ h / (h² + x² + y²)^{3/2} dx dy over [0, x] × [0, y]: the solid angle of that
 /// rectangle seen from height h above its corner.
 pub fn corner_solid_angle(x: f64, y: f64, h: f64) -> f64 {
-    (x * y / (h * (h * h + x * x + y * y).sqrt())).atan()
+    libm::atan(x * y / (h * (h * h + x * x + y * y).sqrt()))
 }
 
 /// Exact mean illuminance over the rectangle [x0, x1] × [y0, y1] of a plane at distance h
@@ -134,7 +134,7 @@ pub fn point_source_cell_lx(intensity_cd: f64, h: f64, x0: f64, x1: f64, y0: f64
 pub fn parallel_corner_factor(a: f64, b: f64, h: f64) -> f64 {
     let (a, b) = (a / h, b / h);
     let (ra, rb) = ((1.0 + a * a).sqrt(), (1.0 + b * b).sqrt());
-    (a / ra * (b / ra).atan() + b / rb * (a / rb).atan()) / (2.0 * std::f64::consts::PI)
+    (a / ra * libm::atan(b / ra) + b / rb * libm::atan(a / rb)) / (2.0 * std::f64::consts::PI)
 }
 
 /// Gauss–Legendre nodes and weights on [0, 1], 8 points: exact for the smooth integrands
@@ -252,12 +252,15 @@ pub fn spot_over_black_floor() -> String {
 /// of the falloff and cone angles.
 pub fn spot_cell_lx(i: usize, j: usize) -> f64 {
     let (i0, h, cone, falloff) = (2000.0, 2.0 - 0.0001, 30.0f64, 15.0f64);
-    let (cc, cf) = (cone.to_radians().cos(), falloff.to_radians().cos());
+    let (cc, cf) = (
+        libm::cos(cone.to_radians()),
+        libm::cos(falloff.to_radians()),
+    );
     let e = |x: f64, y: f64| {
         let d2 = h * h + x * x + y * y;
         let cos = h / d2.sqrt();
         let s = ((cos - cc) / (cf - cc)).clamp(0.0, 1.0);
-        i0 * s * s * (3.0 - 2.0 * s) * h / d2.powf(1.5)
+        i0 * s * s * (3.0 - 2.0 * s) * h / libm::pow(d2, 1.5)
     };
     let w = 3.0 / 16.0;
     subcell_average(e, -1.5 + i as f64 * w, -1.5 + j as f64 * w, w)
@@ -353,7 +356,7 @@ pub const SHADOW_C: f64 = 0.23;
 
 pub fn shadow_scene() -> String {
     let a = SHADOW_ANGLE_DEG.to_radians();
-    let (n, t) = ((a.cos(), a.sin()), (-a.sin(), a.cos()));
+    let (n, t) = ((libm::cos(a), libm::sin(a)), (-libm::sin(a), libm::cos(a)));
     let c_o = SHADOW_C / 1.9999;
     let p0 = (n.0 * c_o - 10.0 * t.0, n.1 * c_o - 10.0 * t.1);
     format!(

@@ -49,7 +49,7 @@ pub fn log_log_svg(panels: &[Panel]) -> String {
 fn decades(values: impl Iterator<Item = f64>) -> (i32, i32) {
     let (lo, hi) = values
         .filter(|v| v.is_finite() && *v > 0.0)
-        .map(f64::log10)
+        .map(libm::log10)
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
             (lo.min(v), hi.max(v))
         });
@@ -75,8 +75,8 @@ fn draw_panel(svg: &mut String, panel: &Panel, left: f64) {
     let (y0, y1) = decades(points().map(|p| p.1));
     let [ml, mt, mr, mb] = MARGIN;
     let (w, h) = (PANEL_W - ml - mr, PANEL_H - mt - mb);
-    let sx = |x: f64| left + ml + (x.log10() - x0 as f64) / (x1 - x0) as f64 * w;
-    let sy = |y: f64| mt + h - (y.log10() - y0 as f64) / (y1 - y0) as f64 * h;
+    let sx = |x: f64| left + ml + (libm::log10(x) - x0 as f64) / (x1 - x0) as f64 * w;
+    let sy = |y: f64| mt + h - (libm::log10(y) - y0 as f64) / (y1 - y0) as f64 * h;
     let _ = writeln!(
         svg,
         r#"<text x="{}" y="20" text-anchor="middle" font-size="13">{}</text>"#,
