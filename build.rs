@@ -1,6 +1,6 @@
 //! Finds Embree 3 (pkg-config `embree3`, else the standard include directories),
 //! generates its bindings with bindgen (with bindgen's layout checks of every FFI struct)
-//! and compiles the C reference benchmark.
+//! and, with the feature `bench`, compiles the C reference benchmark.
 //!
 //! Failures end the build with one line naming the Debian package to install. Embree 4
 //! alone is one of them: it has no ray streams and another query API.
@@ -134,7 +134,11 @@ fn main() {
         ));
     }
 
-    // The C reference benchmark (plain loops over Embree's API), linked into the crate.
+    // The C reference benchmark (plain loops over Embree's API), linked into the crate
+    // only when a benchmark asks for it.
+    if std::env::var_os("CARGO_FEATURE_BENCH").is_none() {
+        return;
+    }
     let mut c = cc::Build::new();
     c.file("benches/c/embree_reference.c")
         .opt_level(3)

@@ -1,11 +1,18 @@
-//! Ray-casting benchmark: `cargo bench --bench rays --features obvhs`.
-//! Prints one Markdown section per scene (office room, Stanford bunny, ≥1M-triangle
-//! procedural scene); BENCHMARKS.md records a run.
+//! Ray-casting benchmark: `cargo bench --bench rays --features obvhs,bench` (without
+//! `bench`, no C reference columns). Prints one Markdown section per scene (office room,
+//! Stanford bunny, ≥1M-triangle procedural scene); BENCHMARKS.md records a run.
+
+// The measurement of `luxtally bench-rays`, one source for both; the bench commands use
+// the rest of it.
+#[allow(dead_code)]
+#[path = "../src/bin/luxtally/bench/timing.rs"]
+mod timing;
 
 use glam::DVec3;
-use luxtally::bench::{bench_rays, load_obj_geometry, procedural_geometry};
+use luxtally::fixtures::{load_obj_geometry, procedural_geometry};
 use luxtally::scene::Geometry;
 use std::path::Path;
+use timing::bench_rays;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());

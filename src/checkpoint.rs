@@ -31,6 +31,8 @@ use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+pub mod resume;
+
 /// The checkpoint in an output directory, and the one before it.
 pub const FILE: &str = "checkpoint.bin";
 pub const PREVIOUS_FILE: &str = "checkpoint.prev";

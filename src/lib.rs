@@ -8,7 +8,10 @@
 //! (equations of method.md, forecast, stop criteria) → `run` (validate, set up, epochs;
 //! `distributed` shares its chunks among processes) → `checkpoint` (save, resume, merge
 //! shards) → `output` (summary.json and files) → `render` (the eye pass) → `limits`
-//! (sizes a run or render before it allocates) → `bench`.
+//! (sizes a run or render before it allocates). The `luxtally` binary (src/bin/luxtally/:
+//! one module per command, the benchmarks among them) is over all of them; `fixtures`
+//! (test scenes and rays, hidden from the docs) serves tests/, benches/ and the
+//! benchmarks.
 //!
 //! Layering: each module uses only modules before it in this order, never one after
 //! it (no import cycles): `error`, `rng`, `sampling`, `raster` (bitmap font, PNG
@@ -16,18 +19,19 @@
 //! command line and the run), `input` (scene-file entries read with their key path,
 //! value checks) → `photometry` → `light` → `scene` → `accel` → `tally` → `trace` →
 //! `stats` → `distributed` → `run` → `checkpoint` → `output` → `render` → `limits` →
-//! `bench`. docs/architecture.md has the whole data path.
+//! `fixtures`. docs/architecture.md has the whole data path.
 
 // `!(x > 0.0)` is deliberate throughout: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
-pub mod bench;
-pub mod chart;
 pub mod checkpoint;
 pub mod criteria;
 pub mod distributed;
 pub mod error;
+// Scenes and rays for tests/, benches/ and the bench commands: not part of the engine.
+#[doc(hidden)]
+pub mod fixtures;
 pub mod input;
 pub mod light;
 pub mod limits;

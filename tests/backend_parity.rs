@@ -5,7 +5,7 @@
 use glam::DVec3;
 use luxtally::accel::embree::EmbreeScene;
 use luxtally::accel::{HitBatch, RayApi, RayBatch, RayCaster, NO_HIT};
-use luxtally::bench::{load_obj_geometry, local_bounds, random_rays, random_segments};
+use luxtally::fixtures::{load_obj_geometry, local_bounds, random_rays, random_segments};
 use luxtally::scene::Geometry;
 use std::path::PathBuf;
 
@@ -232,7 +232,7 @@ fn embree_errors_become_err() {
 mod parity {
     use super::*;
     use luxtally::accel::bvh::ObvhsScene;
-    use luxtally::bench::procedural_geometry;
+    use luxtally::fixtures::procedural_geometry;
 
     /// Distances agree to 1e-4 relative, or to 1e-6 of the scene's size (f32 positions
     /// cannot pin down hits closer than that to the ray origin any better).

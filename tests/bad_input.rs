@@ -400,7 +400,7 @@ fn glb_with_a_bad_vertex_or_index_names_it() {
     ];
     for (k, (vertices, triangles, what)) in cases.iter().enumerate() {
         let glb = temp_path(&format!("bad{k}.glb"));
-        luxtally::bench::write_glb(&glb, vertices, triangles).unwrap();
+        luxtally::fixtures::write_glb(&glb, vertices, triangles).unwrap();
         let m = error_of(&format!(
             "{GREY}[[objects]]\nfile = \"{}\"\nmaterial = \"grey\"\n",
             glb.display()

@@ -164,6 +164,22 @@ fn bad_command_line_values_are_one_line_each() {
     }
 }
 
+/// `merge --threads 0` is refused as `run --threads 0` is, before any checkpoint is
+/// read; so is a value that is none of a flag's names.
+#[test]
+fn merge_refuses_zero_threads_and_unknown_names_are_bad_input() {
+    let out_dir = temp_dir("merge-threads");
+    let out = out_dir.to_str().unwrap();
+    let merge = luxtally(&["merge", "no/such/shard", "--out", out, "--threads", "0"]);
+    assert_fails_with(&merge, &["--threads", "must be at least 1"]);
+    assert_eq!(merge.status.code(), Some(1));
+    let run = luxtally(&["run", "scenes/office.toml", "--threads", "0", "--out", out]);
+    assert_eq!(run.stderr, merge.stderr, "the same refusal");
+    let backend = luxtally(&["run", "scenes/office.toml", "--backend", "optix"]);
+    assert_fails_with(&backend, &["--backend", "optix", "embree or obvhs"]);
+    assert_eq!(backend.status.code(), Some(1));
+}
+
 #[cfg(not(feature = "obvhs"))]
 #[test]
 fn obvhs_backend_without_the_feature_says_how_to_get_it() {

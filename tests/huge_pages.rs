@@ -8,7 +8,7 @@ use luxtally::accel::huge_pages::{
     anon_huge_bytes, can_collapse, huge_pages_enabled, set_huge_pages, wait_for_collapse,
     DEFER_FROM_TRIANGLES,
 };
-use luxtally::bench::procedural_geometry;
+use luxtally::fixtures::procedural_geometry;
 
 #[test]
 fn large_builds_defer_huge_pages_and_leave_them_on() {

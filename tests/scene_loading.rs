@@ -483,12 +483,12 @@ fn name_defaults_to_the_file_stem_and_seed_to_1() {
     assert_eq!(s.geometry.triangle_count(), 0);
 }
 
-/// bench-scale's `glb:N` case: the procedural mesh written by `bench::write_glb` loads
+/// bench-scale's `glb:N` case: the procedural mesh written by `fixtures::write_glb` loads
 /// back through the scene loader as the same triangles, vertices rounded to f32 as the
 /// generated scene's own are.
 #[test]
 fn a_written_glb_loads_back_as_the_same_mesh() {
-    use luxtally::bench::{load_obj_geometry, procedural_geometry, procedural_mesh, write_glb};
+    use luxtally::fixtures::{load_obj_geometry, procedural_geometry, procedural_mesh, write_glb};
     let (vertices, triangles) = procedural_mesh(20_000);
     let path = std::env::temp_dir().join(format!("luxtally-glb-{}.glb", std::process::id()));
     write_glb(&path, &vertices, &triangles).unwrap();

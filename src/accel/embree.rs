@@ -456,9 +456,11 @@ impl EmbreeScene {
         self.triangles
     }
 
-    /// The committed scene handle, for the C reference benchmark.
-    pub(crate) fn raw_scene(&self) -> sys::RTCScene {
-        self.scene
+    /// The committed scene handle (an `RTCScene`), for the C reference benchmark of the
+    /// `luxtally` binary; valid while `self` lives.
+    #[doc(hidden)]
+    pub fn raw_scene(&self) -> *mut c_void {
+        self.scene.cast()
     }
 }
 

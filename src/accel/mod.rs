@@ -300,8 +300,8 @@ pub trait RayCaster: Send + Sync {
     fn default_occluded_api(&self) -> RayApi;
 }
 
-/// Which backend to build.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+/// Which backend to build (`--backend`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Backend {
     #[default]
     Embree,
@@ -335,7 +335,7 @@ impl Backend {
 /// instead of vertex copies: about half the bytes per triangle (83 against 145 with the
 /// geometry at 10⁷ triangles), rays ≈ 35 % slower (BENCHMARKS.md, "Scale"). obvhs has
 /// one layout.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Bvh {
     /// The fast BVH when the run fits its memory budget with it, else the compact one
     /// (`limits::check_run` decides; built without a decision, the fast one).

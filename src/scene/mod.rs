@@ -313,8 +313,9 @@ pub enum Quantity {
 /// pass (`trace`), the direct light's schedule (`run`) and the summary only ask the
 /// methods below, so an estimator that combines these behaviours differently is a
 /// variant, its name and its answers here.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "snake_case")]
+#[value(rename_all = "snake_case")]
 pub enum Estimator {
     /// Analog: a cell scores when a photon crosses it.
     #[default]

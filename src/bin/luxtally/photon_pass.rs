@@ -1,0 +1,195 @@
+//! The photon pass of `run` and `render`: Ctrl-C, the start (fresh, resumed, a shard),
+//! checkpoints and progress while it runs, then the run's outputs and printed lines.
+
+use crate::observer::CliObserver;
+use crate::run::RunArgs;
+use luxtally::accel::RayCaster;
+use luxtally::distributed::Distributor;
+use luxtally::output::{summary, Outputs};
+use luxtally::render;
+use luxtally::run::{run_from, RunOptions, RunResult, Start};
+use luxtally::scene::Scene;
+use luxtally::{Error, Result};
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Runs with all stop criteria, saving checkpoints into `out`; [`finish_run`] writes
+/// its outputs.
+pub fn photon_pass(
+    args: &RunArgs,
+    scene: &Scene,
+    options: &RunOptions,
+    caster: &dyn RayCaster,
+    setup: Instant,
+    out: &Path,
+    distributor: Option<Box<dyn Distributor>>,
+) -> Result<RunResult> {
+    let interrupt = Arc::new(AtomicBool::new(false));
+    {
+        let flag = interrupt.clone();
+        // A second Ctrl-C ends the process at once.
+        let _ = ctrlc::set_handler(move || {
+            if flag.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        });
+    }
+    let mut start = start_of(args, scene, options, out)?;
+    start.distributor = distributor;
+    let shard = start.shard;
+    if args.checkpoint_every.is_nan() || args.checkpoint_every <= 0.0 {
+        return Err(Error::input(
+            "--checkpoint-every",
+            format!(
+                "{} is not a positive number of seconds",
+                args.checkpoint_every
+            ),
+        ));
+    }
+    let mut observer = CliObserver::new(args, scene, out);
+    let result = run_from(
+        scene,
+        options,
+        caster,
+        setup,
+        &interrupt,
+        &mut observer,
+        start,
+    )?;
+    observer.finish(&result.state(scene, options))?;
+    if let Some(s) = shard {
+        // A shard's tallies alone mean nothing: its checkpoint is its output.
+        if !args.quiet {
+            eprintln!(
+                "shard {}/{}: photons {}..{} traced; checkpoint in {}",
+                s.index,
+                s.count,
+                s.first_photon,
+                s.end_photon,
+                out.display()
+            );
+        }
+    }
+    Ok(result)
+}
+
+/// Where the run starts (`--resume`, `--shard`: `checkpoint::resume` decides), saying
+/// so when it resumes from another folder than `out`.
+fn start_of(args: &RunArgs, scene: &Scene, options: &RunOptions, out: &Path) -> Result<Start> {
+    let resume = args.resume.as_deref();
+    let (start, checkpoint) =
+        luxtally::checkpoint::resume::start(scene, options, resume, args.shard.as_deref())?;
+    if let (Some(path), Some(dir)) = (checkpoint, resume) {
+        if dir != out && !args.quiet {
+            eprintln!(
+                "resuming from {}; outputs in {}",
+                path.display(),
+                out.display()
+            );
+        }
+    }
+    Ok(start)
+}
+
+/// summary.json and the files `outputs` asks for, then the run's printed lines; nothing
+/// for a shard, whose checkpoint is its output.
+pub fn finish_run(
+    args: &RunArgs,
+    out: &Path,
+    scene: &Scene,
+    options: &RunOptions,
+    result: &RunResult,
+    outputs: Outputs,
+) -> Result<()> {
+    if result.shard.is_none() {
+        let s = render::write_outputs(out, scene, options, result, outputs)?;
+        if !args.quiet {
+            print_run(&s, out);
+        }
+    }
+    Ok(())
+}
+
+/// The run's lines on stdout: totals, each receiver, the global map, what makes the
+/// error unreliable.
+fn print_run(s: &summary::Summary, out: &Path) {
+    println!(
+        "{}: {} photons, {} rays in {:.2} s ({:.1} Mrays/s), stopped on {}; results in {}",
+        s.scene,
+        s.photons_emitted,
+        s.rays_traced,
+        s.elapsed_s,
+        s.rays_traced as f64 / s.elapsed_s.max(1e-9) / 1e6,
+        s.stop_reason.as_deref().unwrap_or("?"),
+        out.display()
+    );
+    for (name, r) in &s.receivers {
+        println!("  receiver {name}: {}", receiver_line(r));
+    }
+    if let Some(why) = &s.target_unreachable {
+        println!("  target unreachable: {why}");
+    }
+    println!(
+        "  global: {} triangles, mean {:.4} lx, error {:.2} %",
+        s.global.triangles,
+        s.global.mean_illuminance_lx,
+        100.0 * s.global.rel_error.arithmetic
+    );
+    if s.reliability.bounce_cap_biased {
+        println!("  not reliable: {}", bounce_cap_verdict(s));
+    }
+}
+
+/// A receiver's mean and error (over the cells that have one), and its cells that are
+/// unreliable or dark.
+fn receiver_line(r: &summary::ReceiverSummary) -> String {
+    let error = if r.unknown_cells == 0 {
+        format!(
+            "error {:.2} % (arithmetic) {:.2} % (quadratic)",
+            100.0 * r.rel_error.arithmetic,
+            100.0 * r.rel_error.quadratic
+        )
+    } else if r.unknown_cells == r.dark_cells {
+        format!(
+            "error {:.2} % (arithmetic) {:.2} % (quadratic) over the {} lit cells",
+            100.0 * r.rel_error_known_cells.arithmetic,
+            100.0 * r.rel_error_known_cells.quadratic,
+            r.values.len() - r.dark_cells
+        )
+    } else {
+        format!(
+            "error unknown: {} of {} cells without a score ({:.2} % over the others)",
+            r.unknown_cells,
+            r.values.len(),
+            100.0 * r.rel_error_known_cells.quadratic
+        )
+    };
+    let mut flags = String::new();
+    if r.unreliable_cells > 0 {
+        flags += &format!("; {} unreliable cells", r.unreliable_cells);
+    }
+    if r.dark_cells > 0 {
+        flags += &format!(
+            "; {} dark cells (at most {:.4} {})",
+            r.dark_cells, r.dark_upper_bound, r.unit
+        );
+    }
+    format!("mean {:.4} {}, {error}{flags}", r.mean, r.unit)
+}
+
+/// Why the bounce cap makes a run's error unreliable, in words.
+fn bounce_cap_verdict(s: &summary::Summary) -> String {
+    let (k, cap) = (s.photons_killed_by_bounce_cap, s.bounce_cap);
+    match s.bounce_cap_bias_bound {
+        None => format!(
+            "{k} photons stopped by the bounce cap of {cap} bounces in a scene with lossless \
+             materials: the light they dropped is unknown"
+        ),
+        Some(b) => format!(
+            "the light the bounce cap of {cap} bounces can have dropped, {b:.3e} of it \
+             ({k} photons stopped), is not below 1 % of the error"
+        ),
+    }
+}
