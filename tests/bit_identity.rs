@@ -31,6 +31,7 @@ const GOLDEN: &str = "tests/data/golden_outputs.txt";
 const EMBREE_ISAS: [&str; 5] = ["sse2", "sse4.2", "avx", "avx2", "avx512"];
 
 /// glibc's kernels for a CPU without the newer instruction sets (glibc.cpu.hwcaps).
+#[cfg(feature = "obvhs")]
 const OLD_CPU_GLIBC: &str = "glibc.cpu.hwcaps=-AVX2,-FMA,-AVX,-FMA4,-SSE4_1,-SSE4_2";
 
 /// 64-bit FNV-1a: enough to tell two outputs apart, and no dependency.
