@@ -40,6 +40,7 @@ pub mod run;
 pub mod sampling;
 pub mod scene;
 pub mod stats;
+pub mod surface;
 pub mod tally;
 pub mod trace;
 

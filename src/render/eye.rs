@@ -10,7 +10,7 @@ use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng::photon_stream;
 use crate::sampling::uniform;
 use crate::scene::{Camera, Scene};
-use crate::trace::bsdf::{Bsdf, Incidence, LobeKind, Transport};
+use crate::surface::{Bsdf, Incidence, LobeKind, Transport};
 use crate::trace::emit::Emitters;
 use crate::trace::scatter::offset_origin;
 use glam::{DVec3, Vec3};

@@ -13,7 +13,6 @@
 //!   cross the receiver within its near zone (one cell diagonal from their vertex),
 //!   where connections would have unbounded variance.
 
-pub mod bsdf;
 pub mod direct;
 pub mod emit;
 pub mod endless;
@@ -24,8 +23,8 @@ use crate::accel::{HitBatch, RayBatch, RayCaster, Surface};
 use crate::rng::PhotonStreams;
 use crate::sampling::{cosine_from_square, uniform_f32};
 use crate::scene::{Estimator, Geometry, Scene};
+use crate::surface::{Bsdf, LobeKind, Transport};
 use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid, Tallies};
-use bsdf::{Bsdf, LobeKind, Transport};
 use direct::DirectLight;
 use emit::Emitters;
 use glam::{DVec3, Vec3};
