@@ -2,7 +2,7 @@
 //! intersect → at each hit add the indirect term and queue shadow rays for the direct
 //! term (method.md eqs. 1–2) and the specular and glossy continuations → trace the
 //! shadow rays → repeat on the continuations until none is left or the depth limit is
-//! reached. Glossy surfaces take their direct light through the BSDF (`trace::bsdf`) by
+//! reached. Glossy surfaces take their direct light through the BSDF (`surface`) by
 //! the same shadow rays, and continue through one sampled direction per glossy lobe.
 
 use super::map::IndirectField;
