@@ -327,7 +327,8 @@ impl HitsOut<'_> {
         let j = self.cursors.survivors;
         let mut rng = self.survivors.rng[hit.k].clone();
         let survives = (rng.next_u32() as u64) < hit.surfacing.survives_below;
-        (self.survivors).write_unsegmented(j, hit.point, hit.facing, hit.offset, rng);
+        self.survivors
+            .write_unsegmented(j, hit.point, hit.facing, hit.offset, rng);
         self.cursors.survivors += survives as usize;
     }
 
@@ -343,7 +344,8 @@ impl HitsOut<'_> {
         let mut rng = self.survivors.rng[hit.k].clone();
         let survives = (rng.next_u32() as u64) < hit.surfacing.survives_below;
         let (point, facing) = (hit.point, hit.facing);
-        (self.survivors).write(j, point, facing, hit.offset, Segment::Diffuse, rng);
+        self.survivors
+            .write(j, point, facing, hit.offset, Segment::Diffuse, rng);
         self.diffuse_slot[c.diffuse] = j as u32;
         let kept = survives as usize;
         c.ended += !survives as u64;
@@ -370,7 +372,8 @@ impl HitsOut<'_> {
         let [dx, dy, dz] = &mut self.dir;
         (dx[j], dy[j], dz[j]) = (w.x, w.y, w.z);
         let segment = Segment::after(sample.kind, hit.surfacing.glossy_connectable);
-        (self.survivors).write(j, hit.point, side, hit.offset, segment, rng);
+        self.survivors
+            .write(j, hit.point, side, hit.offset, segment, rng);
         self.cursors.survivors += 1;
     }
 }
