@@ -60,7 +60,7 @@ mod tests {
 
     #[test]
     fn fresnel_at_normal_incidence_is_squared_index_ratio() {
-        let n = 1.5;
+        let n = 1.5f64;
         let want = ((n - 1.0) / (n + 1.0)).powi(2);
         assert!((fresnel_from_cosines(1.0, 1.0, 1.0 / n) - want).abs() < 1e-15);
         assert!((fr_dielectric(1.0, n) - want).abs() < 1e-15);
