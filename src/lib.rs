@@ -3,8 +3,10 @@
 //!
 //! Data path: `scene` (load and validate; `light` holds each light kind — its entry,
 //! validation and emission — and `photometry` reads luminaires' files for it)
-//! → `accel` (ray casting backends) → `tally` (receivers and triangle maps: where and
-//! what scores) → `trace` (emission, BSDFs, photon batches, direct light) → `stats`
+//! → `surface` (BSDFs: the `Lobe`/`Bsdf` interface, one file per lobe, microfacet and
+//! Fresnel maths) → `accel` (ray casting backends) → `tally` (receivers and triangle
+//! maps: where and what scores) → `trace` (emission, photon batches, direct light)
+//! → `stats`
 //! (equations of method.md, forecast, stop criteria) → `run` (validate, set up, epochs;
 //! `distributed` shares its chunks among processes) → `checkpoint` (save, resume, merge
 //! shards) → `output` (summary.json and files) → `render` (the eye pass) → `limits`
@@ -17,9 +19,9 @@
 //! it (no import cycles): `error`, `rng`, `sampling`, `raster` (bitmap font, PNG
 //! encoder, palettes, quantile), `criteria` (the stop criteria of the scene file, the
 //! command line and the run), `input` (scene-file entries read with their key path,
-//! value checks) → `photometry` → `light` → `scene` → `accel` → `tally` → `trace` →
-//! `stats` → `distributed` → `run` → `checkpoint` → `output` → `render` → `limits` →
-//! `fixtures`. docs/architecture.md has the whole data path.
+//! value checks) → `photometry` → `light` → `scene` → `surface` → `accel` → `tally` →
+//! `trace` → `stats` → `distributed` → `run` → `checkpoint` → `output` → `render` →
+//! `limits` → `fixtures`. docs/architecture.md has the whole data path.
 
 // `!(x > 0.0)` is deliberate throughout: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -44,6 +46,7 @@ pub mod run;
 pub mod sampling;
 pub mod scene;
 pub mod stats;
+pub mod surface;
 pub mod tally;
 pub mod trace;
 

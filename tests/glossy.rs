@@ -12,7 +12,7 @@ use common::{
 use glam::DVec3;
 use luxtally::accel::Backend;
 use luxtally::scene::{Estimator, Material};
-use luxtally::trace::bsdf::{Bsdf, Frame};
+use luxtally::surface::{Bsdf, Frame};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg32;
 use std::f64::consts::PI;

@@ -2,7 +2,7 @@
 //! intersect → at each hit add the indirect term and queue shadow rays for the direct
 //! term (method.md eqs. 1–2) and the specular and glossy continuations → trace the
 //! shadow rays → repeat on the continuations until none is left or the depth limit is
-//! reached. Glossy surfaces take their direct light through the BSDF (`trace::bsdf`) by
+//! reached. Glossy surfaces take their direct light through the BSDF (`surface`) by
 //! the same shadow rays, and continue through one sampled direction per glossy lobe.
 
 use super::map::IndirectField;
@@ -10,7 +10,7 @@ use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng::photon_stream;
 use crate::sampling::uniform;
 use crate::scene::{Camera, Scene};
-use crate::trace::bsdf::{Bsdf, Incidence, LobeKind, Transport};
+use crate::surface::{Bsdf, Incidence, LobeKind, Transport};
 use crate::trace::emit::Emitters;
 use crate::trace::scatter::offset_origin;
 use glam::{DVec3, Vec3};

@@ -1,5 +1,5 @@
 //! A material: its `[materials.KEY]` entry (the keys), its validation and its
-//! description, in one place. Its physics is `trace::bsdf`, whose `Bsdf::new` turns the
+//! description, in one place. Its physics is `surface`, whose `Bsdf::new` turns the
 //! fields into lobes.
 
 use crate::error::{Error, Result};
@@ -7,7 +7,7 @@ use serde::Deserialize;
 
 /// A material: any mix of Lambertian reflection/transmission, ideal specular
 /// reflection/refraction and glossy (GGX microfacet) reflection/refraction
-/// (`trace::bsdf`). The fractions sum to at most 1; the rest is absorbed.
+/// (`surface`). The fractions sum to at most 1; the rest is absorbed.
 ///
 /// Its `Debug` print is part of the scene fingerprint (checkpoints, indirect_map.bin).
 #[derive(Clone, Debug, PartialEq)]

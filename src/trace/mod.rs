@@ -13,7 +13,6 @@
 //!   cross the receiver within its near zone (one cell diagonal from their vertex),
 //!   where connections would have unbounded variance.
 
-pub mod bsdf;
 pub mod direct;
 pub mod emit;
 pub mod endless;
@@ -24,8 +23,8 @@ use crate::accel::{HitBatch, RayBatch, RayCaster, Surface};
 use crate::rng::PhotonStreams;
 use crate::sampling::{cosine_from_square, uniform_f32};
 use crate::scene::{Estimator, Geometry, Scene};
+use crate::surface::{Bsdf, LobeKind, Transport};
 use crate::tally::{deposit_code, CellPartial, ChunkTally, ReceiverGrid, Tallies};
-use bsdf::{Bsdf, LobeKind, Transport};
 use direct::DirectLight;
 use emit::Emitters;
 use glam::{DVec3, Vec3};
@@ -267,6 +266,118 @@ impl<'a> SurvivorLanes<'a> {
     }
 }
 
+/// A photon's hit as pass 2's kernels read it.
+struct Hit<'s> {
+    /// Its lane in the batch.
+    k: usize,
+    /// Photon index within the chunk.
+    offset: u32,
+    point: Vec3,
+    /// The geometric normal on the side the photon arrived from.
+    facing: Vec3,
+    /// The photon's unit direction and the surface's unit geometric normal.
+    dir: DVec3,
+    normal: DVec3,
+    surfacing: &'s Surfacing,
+}
+
+/// How far pass 2 has written each of its outputs: histories that end at this bounce
+/// (rays that left the scene; photons absorbed or stopped by the bounce cap),
+/// survivors (lane k's successor is written at j ≤ k), diffuse survivors' slots and
+/// deposits.
+#[derive(Clone, Copy, Default)]
+struct HitCursors {
+    escaped: u64,
+    ended: u64,
+    survivors: usize,
+    diffuse: usize,
+    deposits: usize,
+}
+
+/// What pass 2 writes: the survivors compacted in place with their new directions (the
+/// general kernel's; the diffuse ones' come in pass 3), the slots of the diffuse
+/// survivors, the hits' deposits, and how far each is written.
+struct HitsOut<'a> {
+    survivors: SurvivorLanes<'a>,
+    dir: [&'a mut [f32]; 3],
+    /// Written for every hit and kept by advancing the cursor where the triangle holds
+    /// a map: no branch.
+    deposits: &'a mut [u32],
+    /// Written for every Lambertian hit and kept by advancing the cursor, so the
+    /// roulette is no branch.
+    diffuse_slot: &'a mut [u32],
+    cursors: HitCursors,
+}
+
+impl HitsOut<'_> {
+    #[inline(always)]
+    fn deposit(&mut self, code: u32, kept: bool) {
+        self.deposits[self.cursors.deposits] = code;
+        self.cursors.deposits += kept as usize;
+    }
+
+    /// The kernel of a grey Lambertian reflector in a pass no receiver reads segments
+    /// of ([`Tracer::lambert_track`]): the [`Self::lambertian`] roulette with less to
+    /// keep: every survivor scatters diffusely (so survivor j is diffuse survivor j,
+    /// and pass 3 reads no slots), a hit that is not kept ended (counted after the
+    /// loop), and the segment lane is left as it is: with no receiver connecting,
+    /// every segment scores by crossing whatever it started at.
+    #[inline(always)]
+    fn lambert_track(&mut self, hit: &Hit) {
+        let j = self.cursors.survivors;
+        let mut rng = self.survivors.rng[hit.k].clone();
+        let survives = (rng.next_u32() as u64) < hit.surfacing.survives_below;
+        self.survivors
+            .write_unsegmented(j, hit.point, hit.facing, hit.offset, rng);
+        self.cursors.survivors += survives as usize;
+    }
+
+    /// The kernel of a material whose only lobe is diffuse reflection: `Bsdf::sample`'s
+    /// roulette and diffuse lobe, the same draws (the direction's in f32 in pass 3,
+    /// into the hemisphere the photon arrived from). The slot is written whatever the
+    /// roulette says and kept if the photon survives. The stream is copied before its
+    /// draw: a 16-byte load of what the draw just stored 8 bytes of would wait for it.
+    #[inline(always)]
+    fn lambertian(&mut self, hit: &Hit) {
+        let c = &mut self.cursors;
+        let j = c.survivors;
+        let mut rng = self.survivors.rng[hit.k].clone();
+        let survives = (rng.next_u32() as u64) < hit.surfacing.survives_below;
+        let (point, facing) = (hit.point, hit.facing);
+        self.survivors
+            .write(j, point, facing, hit.offset, Segment::Diffuse, rng);
+        self.diffuse_slot[c.diffuse] = j as u32;
+        let kept = survives as usize;
+        c.ended += !survives as u64;
+        c.survivors += kept;
+        c.diffuse += kept;
+    }
+
+    /// The kernel of any other material: the BSDF's roulette over its lobes
+    /// ([`scatter`]), the new direction written here.
+    #[inline(always)]
+    fn general(&mut self, hit: &Hit) {
+        let mut rng = self.survivors.rng[hit.k].clone();
+        let Some(sample) = scatter(&hit.surfacing.bsdf, hit.dir, hit.normal, &mut rng) else {
+            self.cursors.ended += 1;
+            return;
+        };
+        let j = self.cursors.survivors;
+        let side = if sample.transmitted {
+            -hit.facing
+        } else {
+            hit.facing
+        };
+        let w = sample.dir.as_vec3();
+        let [dx, dy, dz] = &mut self.dir;
+        (dx[j], dy[j], dz[j]) = (w.x, w.y, w.z);
+        let segment = Segment::after(sample.kind, hit.surfacing.glossy_connectable);
+        self.survivors
+            .write(j, hit.point, side, hit.offset, segment, rng);
+        self.cursors.survivors += 1;
+    }
+}
+
 /// Scenes up to this many triangles get a [`TriangleSurface`] table (≤ 2.6 MB): on a
 /// small scene the hit's surface lookup is a chain of dependent loads (triangle →
 /// vertex indices → vertices) that dominates the tracer's own work; on a large one the
@@ -480,8 +591,8 @@ impl<'a> Tracer<'a> {
     /// processor overlaps from lane to lane: score the receivers the segments cross;
     /// look up the surfaces hit; then deposit, connect and play the roulette at each
     /// hit, compacting the survivors in place (lane order kept); then sample the diffuse
-    /// survivors' new directions. Each photon draws its random numbers in the same order
-    /// as ever.
+    /// survivors' new directions. Each photon draws its random numbers in the order its
+    /// own history asks for them, whatever the batch around it.
     fn step(&self, s: &mut Scratch, tally: &mut ChunkTally, flux: f64, odd_first: bool) {
         s.shadow_rays.clear();
         s.shadow_scores.clear();
@@ -509,9 +620,11 @@ impl<'a> Tracer<'a> {
 
     /// Pass 2 of [`Self::step`]: deposit, connect and play the roulette at each hit,
     /// compacting the survivors in place. Returns how many survive and how many of them
-    /// scatter diffusely (their slots in `s.diffuse_slot`).
+    /// scatter diffusely (their slots in `s.diffuse_slot`). Each hit goes to the kernel
+    /// of its surface class ([`HitsOut::lambert_track`], [`HitsOut::lambertian`],
+    /// [`HitsOut::general`]), as pbrt's wavefront integrator gives each material its own.
     /// `LAMBERT_TRACK`: [`Tracer::lambert_track`], which removes the connection and
-    /// the general scattering from the loop at compile time (the same numbers).
+    /// the other kernels from the loop at compile time (the same numbers).
     fn hits_pass<const LAMBERT_TRACK: bool>(
         &self,
         s: &mut Scratch,
@@ -519,30 +632,24 @@ impl<'a> Tracer<'a> {
         flux: f64,
         odd_first: bool,
     ) -> (usize, usize) {
-        let (n, hits, rays, lanes) = (s.rays.len(), &s.hits, &mut s.rays, &mut s.lanes);
+        let (n, hits, rays) = (s.rays.len(), &s.hits, &mut s.rays);
         // Every live photon has hit as often: the first hit is direct light.
-        let hit_bounces = lanes.bounces;
-        let (dx, dy, dz) = (&mut rays.dx[..n], &mut rays.dy[..n], &mut rays.dz[..n]);
-        // Survivors leave their hit points along `side` normals (pass 3).
-        let mut out = SurvivorLanes::of(
-            n,
-            (&mut rays.ox, &mut rays.oy, &mut rays.oz),
-            &mut s.side,
-            lanes,
-        );
+        let hit_bounces = s.lanes.bounces;
         let (indirect, capped) = (hit_bounces > 0, hit_bounces >= self.max_bounces);
-        // Deposits are written for every hit and kept by advancing `d` where the
-        // triangle holds a map: no branch.
         let first_deposit = tally.deposits.len();
         tally.deposits.resize(first_deposit + n, 0);
-        let (deposits, mut d) = (&mut tally.deposits[first_deposit..], 0);
-        // Diffuse survivors whose direction pass 3 samples. Written for every
-        // Lambertian hit and kept by advancing `m`, so the roulette is no branch.
-        let (diffuse_slot, mut m) = (&mut s.diffuse_slot[..n], 0);
-        // Histories that end here: rays that left the scene after `hit_bounces` hits,
-        // photons absorbed (or stopped by the bounce cap) at this hit; and survivors so
-        // far (lane k's successor is written at j ≤ k).
-        let (mut escaped, mut ended, mut j) = (0u64, 0u64, 0);
+        let mut out = HitsOut {
+            survivors: SurvivorLanes::of(
+                n,
+                (&mut rays.ox, &mut rays.oy, &mut rays.oz),
+                &mut s.side,
+                &mut s.lanes,
+            ),
+            dir: [&mut rays.dx[..n], &mut rays.dy[..n], &mut rays.dz[..n]],
+            deposits: &mut tally.deposits[first_deposit..],
+            diffuse_slot: &mut s.diffuse_slot[..n],
+            cursors: HitCursors::default(),
+        };
         // The hits, sliced to the batch: no bounds check in the loop.
         let (hit_tri, hit_u, hit_v) = (&hits.tri[..n], &hits.u[..n], &hits.v[..n]);
         let (ngx, ngy, ngz) = (&hits.ngx[..n], &hits.ngy[..n], &hits.ngz[..n]);
@@ -555,30 +662,26 @@ impl<'a> Tracer<'a> {
             } else if let Some(surface) = hits.surface(k, self.geometry) {
                 surface
             } else {
-                escaped += 1;
+                out.cursors.escaped += 1;
                 continue;
             };
+            let [dx, dy, dz] = &out.dir;
             let dir = DVec3::new(dx[k] as f64, dy[k] as f64, dz[k] as f64);
-            let offset = out.offset[k];
+            let offset = out.survivors.offset[k];
             let normal = surface.normal;
-            let n_d = normal.as_dvec3();
-            let cos_in = dir.dot(n_d);
-            let back_face = cos_in > 0.0;
+            let back_face = dir.dot(normal.as_dvec3()) > 0.0;
             // Unmapped (instanced) objects scatter and occlude but hold no tallies.
             let (tri, has_map) = (surface.mapped.unwrap_or(0), surface.mapped.is_some());
             let odd = (offset % 2 == 1) != odd_first;
-            deposits[d] = deposit_code(tri, back_face, indirect, odd);
-            d += has_map as usize;
-            let p = surface.point;
-            let facing = if back_face { -normal } else { normal };
+            out.deposit(deposit_code(tri, back_face, indirect, odd), has_map);
             let surfacing = &self.surfacings[surface.material as usize];
             if !LAMBERT_TRACK && self.any_connects && surfacing.connectable {
                 self.connect(
-                    p,
+                    surface.point,
                     normal,
                     -dir,
                     surfacing,
-                    (offset, &mut out.rng[k]),
+                    (offset, &mut out.survivors.rng[k]),
                     flux,
                     &mut s.shadow_rays,
                     &mut s.shadow_scores,
@@ -586,58 +689,38 @@ impl<'a> Tracer<'a> {
             }
             if capped {
                 tally.killed_by_bounce_cap += 1;
-                ended += 1;
+                out.cursors.ended += 1;
                 continue;
             }
-            if LAMBERT_TRACK {
-                // As below, with less to keep: every survivor scatters diffusely (so
-                // survivor j is diffuse survivor j, and pass 3 reads no slots), a hit
-                // that is not kept ended (counted after the loop), and the segment lane
-                // is left as it is: with no receiver connecting, every segment scores by
-                // crossing whatever it started at.
-                let mut rng = out.rng[k].clone();
-                let survives = (rng.next_u32() as u64) < surfacing.survives_below;
-                out.write_unsegmented(j, p, facing, offset, rng);
-                j += survives as usize;
-                continue;
-            }
-            if surfacing.lambert_only {
-                // `Bsdf::sample`'s roulette and diffuse lobe for a material with no other
-                // lobe: the same draws (the direction's in f32 in pass 3, into the hemisphere
-                // the photon arrived from). The slot is written whatever the roulette says
-                // and kept if the photon survives. The stream is copied before its draw:
-                // a 16-byte load of what the draw just stored 8 bytes of would wait for it.
-                let mut rng = out.rng[k].clone();
-                let survives = (rng.next_u32() as u64) < surfacing.survives_below;
-                out.write(j, p, facing, offset, Segment::Diffuse, rng);
-                diffuse_slot[m] = j as u32;
-                let kept = survives as usize;
-                ended += !survives as u64;
-                j += kept;
-                m += kept;
-                continue;
-            }
-            let mut rng = out.rng[k].clone();
-            let Some(sample) = scatter(&surfacing.bsdf, dir, n_d, &mut rng) else {
-                ended += 1;
-                continue;
+            let hit = Hit {
+                k,
+                offset,
+                point: surface.point,
+                facing: if back_face { -normal } else { normal },
+                dir,
+                normal: normal.as_dvec3(),
+                surfacing,
             };
-            let side = if sample.transmitted { -facing } else { facing };
-            let w = sample.dir.as_vec3();
-            (dx[j], dy[j], dz[j]) = (w.x, w.y, w.z);
-            let segment = Segment::after(sample.kind, surfacing.glossy_connectable);
-            out.write(j, p, side, offset, segment, rng);
-            j += 1;
+            if LAMBERT_TRACK {
+                out.lambert_track(&hit);
+            } else if surfacing.lambert_only {
+                out.lambertian(&hit);
+            } else {
+                out.general(&hit);
+            }
         }
-        if LAMBERT_TRACK && !capped {
-            // Each hit escaped, survived or ended.
-            ended = (n - j) as u64 - escaped;
-            m = j;
-        }
-        tally.deposits.truncate(first_deposit + d);
-        tally.record_histories(hit_bounces, escaped);
+        let c = out.cursors;
+        let (survivors, diffuse, ended) = if LAMBERT_TRACK && !capped {
+            // Each hit escaped, survived or ended; every survivor scatters diffusely.
+            let ended = (n - c.survivors) as u64 - c.escaped;
+            (c.survivors, c.survivors, ended)
+        } else {
+            (c.survivors, c.diffuse, c.ended)
+        };
+        tally.deposits.truncate(first_deposit + c.deposits);
+        tally.record_histories(hit_bounces, c.escaped);
         tally.record_histories(hit_bounces + 1, ended);
-        (j, m)
+        (survivors, diffuse)
     }
 
     /// Pass 3 of [`Self::step`]: the `survivors` leave their surfaces, the `diffuse` ones

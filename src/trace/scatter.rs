@@ -1,10 +1,9 @@
 //! What a surface does to a photon: Russian roulette over the material's lobes (the
-//! photon keeps its flux, so grey materials never change a photon's weight), the ideal
-//! reflection and refraction, and the offset that starts the next ray off the surface
-//! without self-intersection.
+//! photon keeps its flux, so grey materials never change a photon's weight), and the
+//! offset that starts the next ray off the surface without self-intersection.
 
-use super::bsdf::{Bsdf, Sample};
 use crate::sampling::uniform;
+use crate::surface::{Bsdf, Sample};
 use glam::{DVec3, Vec3};
 use rand_pcg::Pcg32;
 
@@ -12,7 +11,8 @@ use rand_pcg::Pcg32;
 /// its direction; a glossy sample's weight G₂/G₁ ≤ 1 (the energy a single-scattering
 /// microfacet lobe loses) is played by a second roulette, so every photon that goes on
 /// still carries the flux it was emitted with (the triangle tallies count photons).
-/// `None`: absorbed. Materials without glossy lobes draw the same numbers as ever.
+/// `None`: absorbed. The second roulette draws only after a glossy sample (weight < 1),
+/// so a material without glossy lobes draws nothing for it.
 #[inline]
 pub fn scatter(bsdf: &Bsdf, dir: DVec3, normal: DVec3, rng: &mut Pcg32) -> Option<Sample> {
     let s = bsdf.sample(dir, normal, rng)?;
@@ -20,37 +20,6 @@ pub fn scatter(bsdf: &Bsdf, dir: DVec3, normal: DVec3, rng: &mut Pcg32) -> Optio
         return None;
     }
     Some(s)
-}
-
-/// Mirror reflection of `dir` about the unit normal `n`.
-#[inline]
-pub fn reflect(dir: DVec3, n: DVec3) -> DVec3 {
-    (dir - n * (2.0 * dir.dot(n))).normalize()
-}
-
-/// Refraction of unit `dir` through a surface whose unit normal `facing` points against
-/// it, with relative index `eta` = n_incident / n_transmitted. Returns the refracted
-/// direction and the unpolarised Fresnel reflectance, or `None` on total internal
-/// reflection.
-#[inline]
-pub fn refract(dir: DVec3, facing: DVec3, eta: f64) -> Option<(DVec3, f64)> {
-    let cos_i = -dir.dot(facing);
-    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
-    if sin2_t >= 1.0 {
-        return None;
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let refracted = (dir * eta + facing * (eta * cos_i - cos_t)).normalize();
-    Some((refracted, fresnel_dielectric(cos_i, cos_t, eta)))
-}
-
-/// Unpolarised Fresnel reflectance from the cosines of the incident and transmitted
-/// angles and eta = n_i / n_t.
-#[inline]
-pub fn fresnel_dielectric(cos_i: f64, cos_t: f64, eta: f64) -> f64 {
-    let r_s = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let r_p = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    0.5 * (r_s * r_s + r_p * r_p)
 }
 
 /// Moves a surface point `p` off the surface along `n` (unit, pointing to the side the
@@ -133,27 +102,6 @@ fn trunc_small(x: f32) -> i32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn fresnel_at_normal_incidence_is_squared_index_ratio() {
-        let n = 1.5;
-        let r = fresnel_dielectric(1.0, 1.0, 1.0 / n);
-        assert!((r - ((n - 1.0) / (n + 1.0)).powi(2)).abs() < 1e-15);
-    }
-
-    #[test]
-    fn refraction_obeys_snell_and_total_internal_reflection() {
-        let dir = DVec3::new(0.6, 0.0, -0.8);
-        let (t, _) = refract(dir, DVec3::Z, 1.0 / 1.5).unwrap();
-        assert!((0.6 - 1.5 * t.x).abs() < 1e-12, "sin θi = n sin θt");
-        // Inside glass at 60° from the normal: beyond the critical angle (41.8°).
-        let inside = DVec3::new(
-            libm::sin(60f64.to_radians()),
-            0.0,
-            libm::cos(60f64.to_radians()),
-        );
-        assert!(refract(inside, -DVec3::Z, 1.5).is_none());
-    }
 
     #[test]
     fn trunc_small_is_the_cast_for_every_offset() {

@@ -1,0 +1,359 @@
+//! Surfaces: one scattering function (BSDF) per material, used by the photon pass, its
+//! next-event connections and the eye pass alike.
+//!
+//! A material is a weighted sum of lobes whose weights (albedos) sum to at most 1, each
+//! a [`Lobe`], one file each: [`Lambertian`] reflection ρ and transmission τ
+//! (`lambertian.rs`), an ideal [`Mirror`] (`mirror.rs`), an ideal dielectric ([`Glass`],
+//! `glass.rs`: Fresnel reflection and refraction), and [`Glossy`] (`glossy.rs`): a rough
+//! reflector and a rough dielectric, both GGX (Trowbridge–Reitz) microfacet lobes with
+//! Smith's height-correlated shadowing, sampled by visible normals (Heitz 2018, as in
+//! pbrt-v4's `TrowbridgeReitzDistribution`, `ConductorBxDF` and `DielectricBxDF`), whose
+//! maths is in `microfacet.rs`. `fresnel.rs` holds reflection, refraction and the one
+//! Fresnel reflectance of dielectrics. [`Bsdf::new`] is the one place that turns a
+//! `Material`'s fields into lobes; callers (`trace`, `render`) evaluate and sample
+//! through [`Bsdf`] and never name a lobe.
+//!
+//! Directions are unit vectors pointing *away* from the surface: `wo` towards where the
+//! path came from, `wi` where it goes (pbrt's convention). The shading frame is the
+//! geometric normal's: there are no shading normals. Transmission is evaluated in its
+//! flux form (pbrt's `TransportMode::Importance`, no 1/η² radiance scaling), for the
+//! ideal glass and the rough dielectric alike; the factors cancel on any way into and
+//! out of a dielectric.
+
+pub mod fresnel;
+mod glass;
+mod glossy;
+mod lambertian;
+pub mod microfacet;
+mod mirror;
+
+pub use glass::Glass;
+pub use glossy::Glossy;
+pub use lambertian::Lambertian;
+pub use microfacet::Frame;
+pub use mirror::Mirror;
+
+use crate::sampling::uniform;
+use crate::scene::Material;
+use glam::DVec3;
+use rand_pcg::Pcg32;
+use std::fmt::Debug;
+use std::sync::Arc;
+
+/// Glossy lobes rougher than this (α = roughness² ≥ 0.04) are connected to next-event
+/// receivers like diffuse ones; sharper lobes would give connections a variance growing
+/// as 1/α², so their photons score next-event receivers by crossing, as a mirror's do.
+pub const CONNECT_MIN_ALPHA: f64 = 0.04;
+
+/// Which kind of lobe scattered a path.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LobeKind {
+    Diffuse,
+    /// A microfacet lobe: `f` is finite, so it can be evaluated and connected.
+    Glossy,
+    /// A mirror or an ideal refraction (a Dirac lobe): it can only be sampled.
+    Specular,
+}
+
+/// Who evaluates f·|cos θ_i| (pbrt's transport mode): photons (flux) connected to a
+/// next-event receiver, or the eye pass (luminance). The physics is the same; the
+/// Lambertian lobe computes it in a different arithmetic form for each (a different
+/// rounding), and every output's bits depend on the form its pass uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Transport {
+    Importance,
+    Radiance,
+}
+
+/// A sampled scattering.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Unit direction the path continues in.
+    pub dir: DVec3,
+    /// It crossed to the other side of the surface.
+    pub transmitted: bool,
+    pub kind: LobeKind,
+    /// f·|cos θ_i|/pdf of the chosen lobe divided by the lobe's albedo weight: 1 for the
+    /// Lambertian and ideal lobes, G₂/G₁(wo) ≤ 1 for a glossy lobe (the energy
+    /// single-scattering microfacet models lose).
+    pub weight: f64,
+}
+
+/// Where an eye ray meets a surface, as the eye pass's lobe methods read it.
+#[derive(Clone, Copy, Debug)]
+pub struct Incidence {
+    /// The ray's unit direction (towards the surface).
+    pub dir: DVec3,
+    /// Unit geometric normal, and the normal on the eye's side.
+    pub n: DVec3,
+    pub facing: DVec3,
+    /// The eye sees the triangle's back.
+    pub back: bool,
+}
+
+impl Incidence {
+    pub fn new(dir: DVec3, n: DVec3) -> Incidence {
+        let back = dir.dot(n) > 0.0;
+        Incidence {
+            dir,
+            n,
+            facing: if back { -n } else { n },
+            back,
+        }
+    }
+}
+
+/// A ray the eye pass continues along from a vertex.
+#[derive(Clone, Copy, Debug)]
+pub struct Continuation {
+    pub dir: DVec3,
+    /// The path's weight times what the lobe passes on.
+    pub weight: f64,
+    /// It leaves through the surface (its origin is offset to the other side).
+    pub transmitted: bool,
+    /// The lobe already took the light of sources it sees (by shadow rays through `f`),
+    /// so sources met along it are not counted again.
+    pub lights_counted: bool,
+}
+
+/// One lobe of a BSDF: its physics for the photon pass, next-event connections and the
+/// eye pass. A new kind of surface implements this and adds one line to [`Bsdf::new`].
+pub trait Lobe: Debug + Send + Sync {
+    fn kind(&self) -> LobeKind;
+
+    /// Connected to next-event receivers (a finite f of bounded variance).
+    fn connectable(&self) -> bool {
+        self.kind() == LobeKind::Diffuse
+    }
+
+    /// Samples the photon's new direction once the roulette chose this lobe with `xi`
+    /// (below the lobe's upper threshold), for a path travelling along unit `dir` onto
+    /// a surface of unit geometric normal `normal`.
+    fn sample(&self, xi: f64, dir: DVec3, normal: DVec3, rng: &mut Pcg32) -> Option<Sample>;
+
+    /// The lobe's finite part of f(wo, wi) (1/sr), its weight included; 0 for Dirac lobes.
+    fn f(&self, _wo: DVec3, _wi: DVec3, _n: DVec3) -> f64 {
+        0.0
+    }
+
+    /// Density (1/sr) with which it samples `wi`, its weight included.
+    fn pdf(&self, _wo: DVec3, _wi: DVec3, _n: DVec3) -> f64 {
+        0.0
+    }
+
+    /// w·f(wo, wi)·|cos θ_i|, with `cos_i` = wi · (the normal on wo's side).
+    fn f_cos(&self, w: f64, wo: DVec3, wi: DVec3, n: DVec3, cos_i: f64, _: Transport) -> f64 {
+        w * self.f(wo, wi, n) * cos_i.abs()
+    }
+
+    /// Eye pass: the luminance (× `w`) it shows from the indirect illuminance read from
+    /// the map on the eye's side and on the other side; `at_depth_limit`: the path
+    /// cannot continue, so lobes that would continue report their share here.
+    fn eye_indirect(
+        &self,
+        _w: f64,
+        _at: &Incidence,
+        _e_seen: &dyn Fn() -> f64,
+        _e_other: &dyn Fn() -> f64,
+        _at_depth_limit: bool,
+    ) -> f64 {
+        0.0
+    }
+
+    /// Eye pass: the rays it continues along (`new_rng`: the vertex's random stream).
+    fn eye_continue(
+        &self,
+        _w: f64,
+        _at: &Incidence,
+        _new_rng: &dyn Fn() -> Pcg32,
+        _out: &mut dyn FnMut(Continuation),
+    ) {
+    }
+}
+
+/// A material's BSDF: its lobes, each with the upper end of its albedo interval on the
+/// cumulative line one uniform number is compared with (Russian roulette over lobes).
+#[derive(Clone, Debug)]
+pub struct Bsdf {
+    lobes: Vec<(f64, Arc<dyn Lobe>)>,
+    /// Cumulative albedo so far (while building), then the total.
+    total: f64,
+    /// Lambertian ρ and τ (the photon pass's fast path for pure reflectors).
+    diffuse: (f64, f64),
+}
+
+impl Bsdf {
+    /// The material's lobes, in roulette order: the one place that maps its fields onto
+    /// lobes (a new lobe adds its line here).
+    pub fn new(m: &Material) -> Bsdf {
+        let mut b = Bsdf {
+            lobes: Vec::new(),
+            total: 0.0,
+            diffuse: (0.0, 0.0),
+        };
+        Lambertian::add(&mut b, m.reflectance, m.transmittance);
+        Mirror::add(&mut b, m.specular_reflectance);
+        Glass::add(&mut b, m.specular_transmittance, m.ior);
+        Glossy::add(&mut b, m);
+        b
+    }
+
+    /// Stacks an albedo `weight` on the roulette line; returns its interval's (lower,
+    /// upper) thresholds. Summed in `Material`'s order: the thresholds' rounding, and so
+    /// every path, depends on that order.
+    fn stack(&mut self, weight: f64) -> (f64, f64) {
+        let lo = self.total;
+        self.total = lo + weight;
+        (lo, self.total)
+    }
+
+    /// Adds a lobe whose interval ends at the line's current total, if `present`.
+    fn push(&mut self, present: bool, lobe: impl Lobe + 'static) {
+        if present {
+            self.lobes.push((self.total, Arc::new(lobe)));
+        }
+    }
+
+    /// Diffuse reflectance and diffuse transmittance.
+    #[inline]
+    pub fn diffuse(&self) -> (f64, f64) {
+        self.diffuse
+    }
+
+    /// Diffuse reflection is its only lobe (or it absorbs everything): the photon
+    /// pass's roulette is then one comparison with ρ.
+    #[inline]
+    pub fn lambert_only(&self) -> bool {
+        self.total == self.diffuse.0
+    }
+
+    /// It has a lobe of this kind.
+    pub fn has(&self, kind: LobeKind) -> bool {
+        self.lobes.iter().any(|(_, l)| l.kind() == kind)
+    }
+
+    /// Its glossy lobes are connected to next-event receivers ([`CONNECT_MIN_ALPHA`]).
+    #[inline]
+    pub fn glossy_connectable(&self) -> bool {
+        self.lobes
+            .iter()
+            .any(|(_, l)| l.kind() == LobeKind::Glossy && l.connectable())
+    }
+
+    /// Some part of it is connected to next-event receivers.
+    #[inline]
+    pub fn connectable(&self) -> bool {
+        self.lobes.iter().any(|(_, l)| l.connectable())
+    }
+
+    /// The BSDF's finite part f(wo, wi) (1/sr); the Dirac lobes are zero almost
+    /// everywhere. `n` is the unit geometric normal, whose side is the dielectrics'
+    /// outside.
+    pub fn f(&self, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
+        self.lobes.iter().fold(0.0, |f, (_, l)| f + l.f(wo, wi, n))
+    }
+
+    /// Density (1/sr) with which [`Bsdf::sample`] returns `wi` through a finite lobe,
+    /// lobe choice included: it integrates to the finite lobes' total weight, not 1.
+    pub fn pdf(&self, wo: DVec3, wi: DVec3, n: DVec3) -> f64 {
+        self.lobes
+            .iter()
+            .fold(0.0, |p, (_, l)| p + l.pdf(wo, wi, n))
+    }
+
+    /// w·f(wo, wi)·|cos θ_i| summed over the finite lobes, or over the connectable ones
+    /// only (`connectable_only`: next-event connections; the other lobes' photons score
+    /// by crossing). `cos_i` = wi · (the normal on wo's side).
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    pub fn f_cos(
+        &self,
+        w: f64,
+        wo: DVec3,
+        wi: DVec3,
+        n: DVec3,
+        cos_i: f64,
+        mode: Transport,
+        connectable_only: bool,
+    ) -> f64 {
+        let mut sum = 0.0;
+        for (_, l) in &self.lobes {
+            let used = if connectable_only {
+                l.connectable()
+            } else {
+                l.kind() != LobeKind::Specular
+            };
+            if used {
+                sum += l.f_cos(w, wo, wi, n, cos_i, mode);
+            }
+        }
+        sum
+    }
+
+    /// Eye pass: the luminance its lobes show from the map's indirect illuminance
+    /// ([`Lobe::eye_indirect`]), added to `l` lobe by lobe.
+    pub fn eye_indirect(
+        &self,
+        l: &mut f64,
+        w: f64,
+        at: &Incidence,
+        e_seen: &dyn Fn() -> f64,
+        e_other: &dyn Fn() -> f64,
+        at_depth_limit: bool,
+    ) {
+        for (_, lobe) in &self.lobes {
+            *l += lobe.eye_indirect(w, at, e_seen, e_other, at_depth_limit);
+        }
+    }
+
+    /// Eye pass: the rays its lobes continue along, in lobe order.
+    pub fn eye_continue(
+        &self,
+        w: f64,
+        at: &Incidence,
+        new_rng: &dyn Fn() -> Pcg32,
+        out: &mut dyn FnMut(Continuation),
+    ) {
+        for (_, lobe) in &self.lobes {
+            lobe.eye_continue(w, at, new_rng, out);
+        }
+    }
+
+    /// Chooses a lobe by Russian roulette on the weights and samples the new direction
+    /// of a path travelling along unit `dir` onto a surface of unit geometric normal
+    /// `normal` (either orientation for the lobes that do not care; the dielectrics'
+    /// outside is the side `normal` points to). `None`: absorbed, or a glossy sample
+    /// fell below the surface (a zero-weight sample).
+    ///
+    /// One uniform number chooses the lobe; the Lambertian and ideal lobes draw only
+    /// what they need after it, so a material without glossy lobes draws no more.
+    #[inline]
+    pub fn sample(&self, dir: DVec3, normal: DVec3, rng: &mut Pcg32) -> Option<Sample> {
+        let xi = uniform(rng);
+        for (hi, lobe) in &self.lobes {
+            if xi < *hi {
+                return lobe.sample(xi, dir, normal, rng);
+            }
+        }
+        None
+    }
+}
+
+/// The normal on the side a path travelling along `dir` comes from.
+#[inline]
+fn facing(dir: DVec3, normal: DVec3) -> DVec3 {
+    if dir.dot(normal) < 0.0 {
+        normal
+    } else {
+        -normal
+    }
+}
+
+fn ideal(dir: DVec3, transmitted: bool, kind: LobeKind) -> Option<Sample> {
+    Some(Sample {
+        dir,
+        transmitted,
+        kind,
+        weight: 1.0,
+    })
+}
