@@ -482,7 +482,8 @@ fn assert_estimators_agree(
 // ---- The eye pass ----
 
 use luxtally::accel;
-use luxtally::render::{self, IndirectMap, Render};
+use luxtally::output::IndirectMap;
+use luxtally::render::{self, Render};
 use luxtally::scene::{Camera, Scene};
 
 fn render_zero_map(scene: &Scene) -> Render {

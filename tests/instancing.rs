@@ -715,7 +715,7 @@ resolution = [3, 3]
             &mut (),
         )
         .expect("runs");
-        let map = luxtally::render::IndirectMap::from_tallies(
+        let map = luxtally::output::IndirectMap::from_tallies(
             &s,
             &result.tallies,
             result.setup.total_flux_lm,

@@ -6,7 +6,7 @@ mod common;
 
 use common::*;
 use luxtally::accel::Backend;
-use luxtally::output::summary;
+use luxtally::output::{summary, write_all, Finished, Outputs};
 use luxtally::run::run;
 use luxtally::stats::{relative_error, triangle_illuminance_lx, MapKind};
 use std::path::{Path, PathBuf};
@@ -60,9 +60,11 @@ fn with_outputs(name: &str, check: impl FnOnce(&Path, &luxtally::run::RunState<'
     let result = run(&scene, &opts, &AtomicBool::new(false), &mut ()).expect("run succeeds");
     let state = result.state(&scene, &opts);
     let dir = temp_dir(name);
-    let json = serde_json::to_vec(&summary::build(&state)).expect("summary serialises");
-    std::fs::write(dir.join("summary.json"), json).expect("summary written");
-    luxtally::output::write_run_files(&dir, &state).expect("outputs written");
+    let finished = Finished {
+        run: Some(&state),
+        image: None,
+    };
+    write_all(&dir, finished, Outputs::ALL).expect("outputs written");
     check(&dir, &state);
 }
 

@@ -7,7 +7,8 @@ mod common;
 use common::{parallel_corner_factor, scene};
 use glam::DVec3;
 use luxtally::accel::{self, Backend, RayBatch};
-use luxtally::render::{self, IndirectMap, Render};
+use luxtally::output::{write_all, Finished, IndirectMap, Outputs};
+use luxtally::render::{self, Render};
 use luxtally::run::{run, RunOptions};
 use luxtally::scene::{Camera, Scene};
 use luxtally::stats::{map_stats, MapKind};
@@ -319,7 +320,7 @@ fn saved_map_round_trips_and_refuses_another_scene() {
     map.photons = 7;
     let dir = std::env::temp_dir().join(format!("luxtally-map-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(render::MAP_FILE);
+    let path = dir.join(luxtally::output::MAP_FILE);
     map.save(&path, &s).unwrap();
     assert_eq!(IndirectMap::load(&path, &s).unwrap(), map);
     let other = scene(&BOX.replace("reflectance = 0.5", "reflectance = 0.4"));
@@ -351,7 +352,11 @@ fn office_image_is_stored_as_an_artifact() {
     let r = render_with(&s, &map, Backend::Embree, 2);
     let dir = artifacts_dir().join("office_render");
     std::fs::create_dir_all(&dir).unwrap();
-    render::output::write_all(&r.image, &dir).unwrap();
+    let finished = Finished {
+        run: None,
+        image: Some(&r.image),
+    };
+    write_all(&dir, finished, Outputs::ALL).unwrap();
     eprintln!(
         "office: {:.2} M eye rays/s, {:.2} s per megapixel; images in {}",
         r.eye_rays_per_s() / 1e6,

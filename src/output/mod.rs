@@ -1,23 +1,62 @@
 //! Outputs of a run: summary.json (the contract's keys and more), the receivers' EXR,
-//! CSV and PNG files, the scene map (PLY) and report.html (docs/outputs.md).
+//! CSV and PNG files, the scene map (PLY), report.html, the indirect map and the
+//! rendered images (docs/outputs.md). A finished command writes them all through
+//! [`write_all`]; every file goes through [`write_atomic`].
 
+pub mod image;
+pub mod indirect_map;
 pub mod ply;
 pub mod preview;
 pub mod receiver_files;
 pub mod report;
 pub mod summary;
 
+pub use image::Image;
+pub use indirect_map::{IndirectMap, MAP_FILE};
+
 use crate::run::RunState;
 use crate::{Error, Result};
 use serde_json::Value;
+use std::fs::File;
+use std::io::{BufWriter, Write};
 use std::path::Path;
 
-/// Writes `bytes` to `path` atomically (temporary file, then rename), so a reader or an
-/// interrupted run never sees half a file.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, bytes).map_err(|e| Error::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+/// Writes `path` atomically and durably: `write` fills a temporary file beside it
+/// (`NAME.tmp`, same directory, so the rename cannot cross file systems), the file is
+/// synced, renamed over `path`, and the directory synced. A reader, an interrupted run
+/// or a crash sees the old file or the whole new one, never a short or empty one (a
+/// rename without the sync may reach the disk before the data). The directory sync
+/// makes the new name itself survive a crash; it is best effort (skipped where a
+/// directory cannot be opened or synced, as on Windows).
+pub fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&mut BufWriter<File>) -> std::io::Result<()>,
+) -> Result<()> {
+    let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
+    tmp_name.push(".tmp");
+    let tmp = path.with_file_name(tmp_name);
+    let written = (|| {
+        let mut w = BufWriter::with_capacity(1 << 20, File::create(&tmp)?);
+        write(&mut w)?;
+        w.into_inner().map_err(|e| e.into_error())?.sync_all()
+    })();
+    if let Err(e) = written {
+        // A partial file would only take room (the disk may be full).
+        let _ = std::fs::remove_file(&tmp);
+        return Err(Error::io(&tmp, e));
+    }
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))?;
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+    if let Ok(d) = File::open(dir.unwrap_or(Path::new("."))) {
+        // Best effort: some file systems refuse to sync a directory.
+        let _ = d.sync_all();
+    }
+    Ok(())
+}
+
+/// [`write_atomic`] of bytes in memory.
+fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic(path, |w| w.write_all(bytes))
 }
 
 /// A receiver's name as a file name: characters other than ASCII letters, digits, `-`,
@@ -38,12 +77,6 @@ pub fn file_stem(name: &str) -> String {
     } else {
         s
     }
-}
-
-/// summary.json's document of a state, as JSON data.
-pub fn summary_value(state: &RunState<'_>) -> Result<Value> {
-    serde_json::to_value(summary::build(state))
-        .map_err(|e| Error::Unsupported(format!("summary.json: {e}")))
 }
 
 /// Which files a run writes besides summary.json (`--outputs LIST`).
@@ -111,69 +144,101 @@ impl Outputs {
     }
 }
 
-/// summary.json of `s` in `out` (pretty JSON, written atomically).
-pub fn save_summary(out: &Path, s: &summary::Summary) -> Result<()> {
-    let json = serde_json::to_vec_pretty(s)
-        .map_err(|e| Error::Unsupported(format!("summary.json: {e}")))?;
-    write_atomic(&out.join("summary.json"), &json)
+/// What a command has finished: a photon pass (its state) and/or a rendered image.
+#[derive(Clone, Copy)]
+pub struct Finished<'a> {
+    pub run: Option<&'a RunState<'a>>,
+    pub image: Option<&'a Image>,
 }
 
-/// Every file besides summary.json: `receivers/NAME.{exr,csv,png}`,
-/// `receivers/NAME_error.png`, `scene_map.ply` and `report.html`.
-pub fn write_run_files(out: &Path, state: &RunState<'_>) -> Result<()> {
-    write_run_files_with(out, state, &summary::build(state), Outputs::ALL)
-}
-
-/// The files of `outputs` besides summary.json; `s` is the state's summary.
-pub fn write_run_files_with(
+/// Every output of what a command finished, into `out`: summary.json and the files of
+/// `outputs` (receivers, scene map, report, indirect map) for a run, the files of
+/// `outputs.render` for an image. Returns the run's summary.
+pub fn write_all(
     out: &Path,
-    state: &RunState<'_>,
-    s: &summary::Summary,
+    finished: Finished<'_>,
     outputs: Outputs,
-) -> Result<()> {
-    let dir = out.join("receivers");
-    if outputs.receivers {
-        std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+) -> Result<Option<summary::Summary>> {
+    let summary = match finished.run {
+        Some(state) => Some(write_run(out, state, outputs)?),
+        None => None,
+    };
+    if let (Some(image), true) = (finished.image, outputs.render) {
+        write_bytes(&out.join("render.exr"), &image::render_exr(image)?)?;
+        write_bytes(&out.join("render.png"), &image::tone_mapped_png(image)?)?;
+        write_bytes(
+            &out.join("render_false_colour.png"),
+            &image::false_colour_png(image)?,
+        )?;
     }
-    for r in state.scene.receivers.iter().filter(|_| outputs.receivers) {
-        if let Some(rs) = s.receivers.get(&r.name) {
-            let exr = receiver_files::receiver_exr(&r.name, rs)?;
-            write_atomic(&dir.join(format!("{}.exr", file_stem(&r.name))), &exr)?;
-            let csv = receiver_files::receiver_csv(r, rs);
-            write_atomic(
-                &dir.join(format!("{}.csv", file_stem(&r.name))),
-                csv.as_bytes(),
-            )?;
-        }
+    Ok(summary)
+}
+
+/// summary.json and the run files of `outputs`; returns the summary.
+fn write_run(out: &Path, state: &RunState<'_>, outputs: Outputs) -> Result<summary::Summary> {
+    let s = summary::build(state);
+    save_summary(out, &s)?;
+    if outputs.receivers {
+        write_receiver_files(out, state, &s)?;
     }
     if outputs.map {
-        write_atomic_with(&out.join("scene_map.ply"), |w| {
+        write_atomic(&out.join("scene_map.ply"), |w| {
             ply::write_scene_map_ply(state, w)
         })?;
     }
     if outputs.receivers {
-        write_receiver_pngs(out, s)?;
+        write_receiver_pngs(out, &s)?;
     }
     if outputs.report {
-        write_live_report(out, &summary_json(s)?, report::DEFAULT_REFRESH_S)?;
+        write_report_html(out, &summary_json(&s)?, report::DEFAULT_REFRESH_S)?;
     }
-    Ok(())
+    if outputs.indirect {
+        IndirectMap::save_from_tallies(
+            &out.join(MAP_FILE),
+            state.scene,
+            state.tallies,
+            state.setup.total_flux_lm,
+        )?;
+    }
+    Ok(s)
 }
 
-/// As [`write_atomic`], streaming through a `BufWriter` instead of a byte buffer.
-pub fn write_atomic_with(
-    path: &Path,
-    write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
-) -> Result<()> {
-    use std::io::Write;
-    let tmp = path.with_extension("tmp");
-    let file = std::fs::File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
-    let mut w = std::io::BufWriter::with_capacity(1 << 20, file);
-    write(&mut w)
-        .and_then(|()| w.flush())
-        .map_err(|e| Error::io(&tmp, e))?;
-    drop(w);
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+/// summary.json of `s` in `out` (pretty JSON); also saved during a run.
+pub fn save_summary(out: &Path, s: &summary::Summary) -> Result<()> {
+    let json = serde_json::to_vec_pretty(s)
+        .map_err(|e| Error::Unsupported(format!("summary.json: {e}")))?;
+    write_bytes(&out.join("summary.json"), &json)
+}
+
+/// report.html during a run, refreshing every `refresh_s` (the PNGs wait for the end).
+pub fn write_live_report(out: &Path, state: &RunState<'_>, refresh_s: f64) -> Result<()> {
+    write_report_html(out, &summary_json(&summary::build(state))?, refresh_s)
+}
+
+/// `luxtally report OUT_DIR`: report.html and the PNGs again from OUT_DIR/summary.json.
+pub fn rebuild_report(out: &Path) -> Result<()> {
+    let path = out.join("summary.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+    let summary: summary::Summary = serde_json::from_str(&text)
+        .map_err(|e| Error::input(path.display().to_string(), format!("not a summary: {e}")))?;
+    write_receiver_pngs(out, &summary)?;
+    write_report_html(out, &summary_json(&summary)?, report::DEFAULT_REFRESH_S)
+}
+
+/// `receivers/NAME.{exr,csv}`.
+fn write_receiver_files(out: &Path, state: &RunState<'_>, s: &summary::Summary) -> Result<()> {
+    let dir = out.join("receivers");
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    for r in &state.scene.receivers {
+        if let Some(rs) = s.receivers.get(&r.name) {
+            let stem = file_stem(&r.name);
+            let exr = receiver_files::receiver_exr(&r.name, rs)?;
+            write_bytes(&dir.join(format!("{stem}.exr")), &exr)?;
+            let csv = receiver_files::receiver_csv(r, rs);
+            write_bytes(&dir.join(format!("{stem}.csv")), csv.as_bytes())?;
+        }
+    }
+    Ok(())
 }
 
 /// summary.json's document as JSON data.
@@ -181,13 +246,7 @@ fn summary_json(summary: &summary::Summary) -> Result<Value> {
     serde_json::to_value(summary).map_err(|e| Error::Unsupported(format!("summary.json: {e}")))
 }
 
-/// report.html and the receivers' PNG previews from a summary.
-pub fn write_report(out: &Path, summary: &summary::Summary, refresh_s: f64) -> Result<()> {
-    write_receiver_pngs(out, summary)?;
-    write_live_report(out, &summary_json(summary)?, refresh_s)
-}
-
-/// The receivers' PNG previews from a summary.
+/// The receivers' PNG previews (`receivers/NAME.png`, `NAME_error.png`) from a summary.
 fn write_receiver_pngs(out: &Path, summary: &summary::Summary) -> Result<()> {
     let origin = out.join("summary.json").display().to_string();
     let receivers = preview::ReceiverData::from_summary(summary, &origin)?;
@@ -197,26 +256,15 @@ fn write_receiver_pngs(out: &Path, summary: &summary::Summary) -> Result<()> {
     }
     for r in &receivers {
         let (value, error) = preview::receiver_pngs(r)?;
-        write_atomic(&dir.join(format!("{}.png", file_stem(&r.name))), &value)?;
-        write_atomic(
-            &dir.join(format!("{}_error.png", file_stem(&r.name))),
-            &error,
-        )?;
+        let stem = file_stem(&r.name);
+        write_bytes(&dir.join(format!("{stem}.png")), &value)?;
+        write_bytes(&dir.join(format!("{stem}_error.png")), &error)?;
     }
     Ok(())
 }
 
-/// report.html alone (during a run: the PNGs wait for the end).
-pub fn write_live_report(out: &Path, summary: &Value, refresh_s: f64) -> Result<()> {
+/// report.html from summary.json's document.
+fn write_report_html(out: &Path, summary: &Value, refresh_s: f64) -> Result<()> {
     let html = report::report_html(summary, refresh_s)?;
-    write_atomic(&out.join("report.html"), html.as_bytes())
-}
-
-/// `luxtally report OUT_DIR`: report.html and the PNGs again from OUT_DIR/summary.json.
-pub fn rebuild_report(out: &Path) -> Result<()> {
-    let path = out.join("summary.json");
-    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
-    let summary: summary::Summary = serde_json::from_str(&text)
-        .map_err(|e| Error::input(path.display().to_string(), format!("not a summary: {e}")))?;
-    write_report(out, &summary, report::DEFAULT_REFRESH_S)
+    write_bytes(&out.join("report.html"), html.as_bytes())
 }

@@ -24,14 +24,6 @@ pub const TILE_PIXELS: usize = 256;
 /// this fraction of what they would show).
 const MIN_WEIGHT: f64 = 1e-5;
 
-/// Luminance image, row-major from the top-left pixel, cd/m².
-#[derive(Clone, Debug, PartialEq)]
-pub struct Image {
-    pub width: usize,
-    pub height: usize,
-    pub luminance_cdm2: Vec<f64>,
-}
-
 /// Rays the eye pass cast.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RayCounts {

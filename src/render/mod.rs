@@ -3,22 +3,19 @@
 //! surfaces show direct light computed deterministically (eqs. 1–2, shadow rays) plus the
 //! interpolated indirect map; mirrors and glass only redirect the eye ray.
 //!
-//! Data path: scene + `IndirectMap` (from the run's tallies or `indirect_map.bin`) →
-//! `EyePass` over the run's ray caster → `Image` → `output` (EXR, tone-mapped PNG,
-//! false-colour PNG).
+//! Data path: scene + `output::IndirectMap` (from the run's tallies or
+//! `indirect_map.bin`) → `IndirectField` → `EyePass` over the run's ray caster →
+//! `output::Image`, which `output::write_all` writes (EXR, tone-mapped PNG, false-colour
+//! PNG).
 
 mod eye;
 pub mod map;
-pub mod output;
 
-pub use eye::{
-    area_samples_per_side, EyePass, Image, RayCounts, Scratch, MAX_AREA_SAMPLES, TILE_PIXELS,
-};
-pub use map::{IndirectField, IndirectMap, MAP_FILE};
+pub use eye::{area_samples_per_side, EyePass, RayCounts, Scratch, MAX_AREA_SAMPLES, TILE_PIXELS};
+pub use map::IndirectField;
 
 use crate::accel::RayCaster;
-use crate::output::{save_summary, summary, write_run_files_with, Outputs};
-use crate::run::{RunOptions, RunResult};
+use crate::output::{Image, IndirectMap};
 use crate::scene::{Camera, Scene};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -120,28 +117,4 @@ pub fn render_with(
         rays,
         elapsed_s: start.elapsed().as_secs_f64(),
     })
-}
-
-/// summary.json, the run files `outputs` asks for and the indirect map (here because
-/// `render --from` reads it) of a finished run, into `out`; returns the summary.
-pub fn write_outputs(
-    out: &std::path::Path,
-    scene: &Scene,
-    options: &RunOptions,
-    result: &RunResult,
-    outputs: Outputs,
-) -> Result<summary::Summary> {
-    let state = result.state(scene, options);
-    let s = summary::build(&state);
-    save_summary(out, &s)?;
-    write_run_files_with(out, &state, &s, outputs)?;
-    if outputs.indirect {
-        IndirectMap::save_from_tallies(
-            &out.join(MAP_FILE),
-            scene,
-            &result.tallies,
-            result.setup.total_flux_lm,
-        )?;
-    }
-    Ok(s)
 }

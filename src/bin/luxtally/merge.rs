@@ -4,8 +4,7 @@
 use crate::run::limit_threads;
 use luxtally::accel;
 use luxtally::checkpoint::Checkpoint;
-use luxtally::output::Outputs;
-use luxtally::render;
+use luxtally::output::{self, Finished, Outputs};
 use luxtally::run::RunOptions;
 use luxtally::scene::Estimator;
 use luxtally::{Error, Result};
@@ -60,7 +59,12 @@ pub fn command(args: MergeArgs) -> Result<()> {
     let setup = Instant::now();
     let caster = accel::build_with(options.backend, options.bvh, &scene.geometry)?;
     let result = luxtally::checkpoint::merge(&scene, &options, caster.as_ref(), setup, shards)?;
-    let _ = render::write_outputs(out, &scene, &options, &result, Outputs::ALL)?;
+    let state = result.state(&scene, &options);
+    let finished = Finished {
+        run: Some(&state),
+        image: None,
+    };
+    output::write_all(out, finished, Outputs::ALL)?;
     println!(
         "merged {} shards: {} photons; results in {}",
         args.dirs.len(),

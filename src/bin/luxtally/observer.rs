@@ -88,8 +88,7 @@ impl Observer for CliObserver {
                 .is_none_or(|t| t.elapsed().as_secs_f64() >= every);
             if !shard && state.stop_reason.is_none() && due {
                 self.last_report = Some(Instant::now());
-                let written = luxtally::output::summary_value(state)
-                    .and_then(|s| luxtally::output::write_live_report(&self.out, &s, every));
+                let written = luxtally::output::write_live_report(&self.out, state, every);
                 if let Err(e) = written {
                     self.save_error.get_or_insert(e);
                 }

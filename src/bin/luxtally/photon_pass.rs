@@ -5,8 +5,7 @@ use crate::observer::CliObserver;
 use crate::run::RunArgs;
 use luxtally::accel::RayCaster;
 use luxtally::distributed::Distributor;
-use luxtally::output::{summary, Outputs};
-use luxtally::render;
+use luxtally::output::{self, summary, Finished, Outputs};
 use luxtally::run::{run_from, RunOptions, RunResult, Start};
 use luxtally::scene::Scene;
 use luxtally::{Error, Result};
@@ -104,8 +103,13 @@ pub fn finish_run(
     outputs: Outputs,
 ) -> Result<()> {
     if result.shard.is_none() {
-        let s = render::write_outputs(out, scene, options, result, outputs)?;
-        if !args.quiet {
+        let state = result.state(scene, options);
+        let finished = Finished {
+            run: Some(&state),
+            image: None,
+        };
+        let s = output::write_all(out, finished, outputs)?;
+        if let (Some(s), false) = (s, args.quiet) {
             print_run(&s, out);
         }
     }

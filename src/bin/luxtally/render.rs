@@ -6,8 +6,8 @@ use crate::progress::{self, Progress};
 use crate::run::{budget_for, limit_threads, note_bvh, outputs_of, run_options, OutDir, RunArgs};
 use luxtally::accel;
 use luxtally::limits;
-use luxtally::output::Outputs;
-use luxtally::render::{self, IndirectMap, MAP_FILE};
+use luxtally::output::{self, Finished, IndirectMap, Outputs, MAP_FILE};
+use luxtally::render;
 use luxtally::run::RunOptions;
 use luxtally::scene::{Camera, Scene};
 use luxtally::{Error, Result};
@@ -101,9 +101,11 @@ fn render_into(
         &|n| progress.inc(n as u64, line),
     )?;
     progress.finish(true, line(pixels));
-    if outputs.render {
-        render::output::write_all(&r.image, out)?;
-    }
+    let finished = Finished {
+        run: None,
+        image: Some(&r.image),
+    };
+    output::write_all(out, finished, outputs)?;
     if !args.run.quiet {
         println!(
             "render: {}×{} px, {} samples/px, {} eye rays + {} shadow rays in {:.2} s \

@@ -8,7 +8,7 @@ use luxtally::fixtures::{
     lit_scene, load_obj_geometry, local_bounds, procedural_geometry, procedural_mesh, random_rays,
     write_glb,
 };
-use luxtally::output::write_atomic;
+use luxtally::output::{self, write_atomic, Finished, Outputs};
 use luxtally::run::{run_from, RunOptions, RunResult, Start};
 use luxtally::scene::{Estimator, Geometry, Scene};
 use luxtally::{Error, Result};
@@ -68,7 +68,8 @@ pub fn command(args: BenchScaleArgs) -> Result<()> {
         .collect::<Result<Vec<_>>>()?;
     print!("{}", scale_table(&results, threads));
     if let Some(path) = &args.plot {
-        write_atomic(path, scale_plot(&results).as_bytes())?;
+        let plot = scale_plot(&results);
+        write_atomic(path, |w| std::io::Write::write_all(w, plot.as_bytes()))?;
         println!("plot: {}", path.display());
     }
     Ok(())
@@ -351,7 +352,12 @@ fn scale_outputs(scene: &Scene, options: &RunOptions, result: &RunResult) -> Res
     let dir = std::env::temp_dir().join(format!("luxtally-bench-scale-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let start = Instant::now();
-    luxtally::render::write_outputs(&dir, scene, options, result, luxtally::output::Outputs::ALL)?;
+    let state = result.state(scene, options);
+    let finished = Finished {
+        run: Some(&state),
+        image: None,
+    };
+    output::write_all(&dir, finished, Outputs::ALL)?;
     let seconds = start.elapsed().as_secs_f64();
     let bytes = std::fs::read_dir(&dir)
         .map_err(|e| Error::io(&dir, e))?

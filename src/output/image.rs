@@ -1,31 +1,39 @@
-//! The rendered image's files: `render.exr` (luminance, cd/m², f32), `render.png`
+//! The rendered image and its files: `render.exr` (luminance, cd/m², f32), `render.png`
 //! (tone-mapped) and `render_false_colour.png` (log-scale pseudo-colour with a scale).
 
-use super::Image;
 use crate::raster::font::{draw_text, text_width};
 use crate::raster::palette::false_colour;
 use crate::raster::{encode_png, quantile, Rank};
 use crate::{Error, Result};
-use std::path::Path;
+
+/// Luminance image, row-major from the top-left pixel, cd/m².
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: usize,
+    pub height: usize,
+    pub luminance_cdm2: Vec<f64>,
+}
 
 /// Reinhard's key value: the log-average luminance maps to this display value.
 pub const KEY: f64 = 0.18;
 /// Scaled luminances at or above this percentile burn to white (Reinhard's L_white).
 pub const WHITE_PERCENTILE: f64 = 0.999;
 
-/// Writes the luminance as a one-channel (`Y`) f32 EXR.
-pub fn write_exr(image: &Image, path: &Path) -> Result<()> {
+/// The luminance as a one-channel (`Y`) f32 EXR, as bytes.
+pub fn render_exr(image: &Image) -> Result<Vec<u8>> {
     use exr::prelude::{SpecificChannels, Vec2, WritableImage};
     let (w, l) = (image.width, &image.luminance_cdm2);
     let channels = SpecificChannels::build()
         .with_channel("Y")
         .with_pixel_fn(|p: Vec2<usize>| (l[p.1 * w + p.0] as f32,));
+    let mut bytes = std::io::Cursor::new(Vec::new());
     exr::prelude::Image::from_channels((image.width, image.height), channels)
         .write()
         // Chunks in file order: the same image gives the same bytes.
         .non_parallel()
-        .to_file(path)
-        .map_err(|e| crate::Error::Unsupported(format!("{}: {e}", path.display())))
+        .to_buffered(&mut bytes)
+        .map_err(|e| Error::Unsupported(format!("render.exr: {e}")))?;
+    Ok(bytes.into_inner())
 }
 
 /// Log-average luminance of the lit pixels (Reinhard's L̄w), cd/m²; 0 if none is lit.
@@ -71,23 +79,21 @@ pub fn tone_map(image: &Image) -> Vec<u8> {
         .collect()
 }
 
-/// Writes an 8-bit PNG file.
-fn write_png(
-    path: &Path,
+/// An 8-bit PNG file's bytes; `name` is for the error.
+fn png_bytes(
+    name: &str,
     width: usize,
     height: usize,
     colour: png::ColorType,
     data: &[u8],
-) -> Result<()> {
-    let bytes = encode_png(width, height, colour, data)
-        .map_err(|e| Error::Unsupported(format!("{}: {e}", path.display())))?;
-    std::fs::write(path, bytes).map_err(|e| Error::io(path, e))
+) -> Result<Vec<u8>> {
+    encode_png(width, height, colour, data).map_err(|e| Error::Unsupported(format!("{name}: {e}")))
 }
 
-/// Writes the tone-mapped image (8-bit grey, sRGB).
-pub fn write_tone_mapped_png(image: &Image, path: &Path) -> Result<()> {
-    write_png(
-        path,
+/// The tone-mapped image (8-bit grey, sRGB) as a PNG.
+pub fn tone_mapped_png(image: &Image) -> Result<Vec<u8>> {
+    png_bytes(
+        "render.png",
         image.width,
         image.height,
         png::ColorType::Grayscale,
@@ -131,9 +137,9 @@ fn scale_label(v: f64) -> String {
     }
 }
 
-/// Writes the log-scale pseudo-colour image with a scale bar and labels at its
+/// The log-scale pseudo-colour image as a PNG, with a scale bar and labels at its
 /// right, labelled at 1-2-5 values (cd/m²); pixels that see nothing (L = 0) are black.
-pub fn write_false_colour_png(image: &Image, path: &Path) -> Result<()> {
+pub fn false_colour_png(image: &Image) -> Result<Vec<u8>> {
     const PANEL: usize = 96;
     const SCALE: usize = 2;
     let (w, h) = (image.width, image.height);
@@ -184,14 +190,13 @@ pub fn write_false_colour_png(image: &Image, path: &Path) -> Result<()> {
             white,
         );
     }
-    write_png(path, width, height, png::ColorType::Rgb, &rgb)
-}
-
-/// Writes `render.exr`, `render.png` and `render_false_colour.png` into `dir`.
-pub fn write_all(image: &Image, dir: &Path) -> Result<()> {
-    write_exr(image, &dir.join("render.exr"))?;
-    write_tone_mapped_png(image, &dir.join("render.png"))?;
-    write_false_colour_png(image, &dir.join("render_false_colour.png"))
+    png_bytes(
+        "render_false_colour.png",
+        width,
+        height,
+        png::ColorType::Rgb,
+        &rgb,
+    )
 }
 
 #[cfg(test)]
