@@ -35,11 +35,11 @@ pub fn write_atomic(
     let mut tmp_name = path.file_name().unwrap_or_default().to_os_string();
     tmp_name.push(".tmp");
     let tmp = path.with_file_name(tmp_name);
-    let written = (|| {
-        let mut w = BufWriter::with_capacity(1 << 20, File::create(&tmp)?);
+    let written = File::create(&tmp).and_then(|file| {
+        let mut w = BufWriter::with_capacity(1 << 20, file);
         write(&mut w)?;
         w.into_inner().map_err(|e| e.into_error())?.sync_all()
-    })();
+    });
     if let Err(e) = written {
         // A partial file would only take room (the disk may be full).
         let _ = std::fs::remove_file(&tmp);
@@ -163,7 +163,7 @@ pub fn write_all(
         Some(state) => Some(write_run(out, state, outputs)?),
         None => None,
     };
-    if let (Some(image), true) = (finished.image, outputs.render) {
+    if let Some(image) = finished.image.filter(|_| outputs.render) {
         write_bytes(&out.join("render.exr"), &image::render_exr(image)?)?;
         write_bytes(&out.join("render.png"), &image::tone_mapped_png(image)?)?;
         write_bytes(
