@@ -16,7 +16,7 @@
 pub mod direct;
 pub mod emit;
 pub mod endless;
-pub mod receiver;
+pub mod receiver_reach;
 pub mod scatter;
 
 use crate::accel::{HitBatch, RayBatch, RayCaster, Surface};
