@@ -189,7 +189,7 @@ pub fn random_segments(lo: Vec3, hi: Vec3, n: usize, seed: u64) -> RayBatch {
 /// (ρ = 0.5) on every triangle and a point light at the centre of the bounds' top tenth.
 pub fn lit_scene(name: &str, mut geometry: Geometry) -> Scene {
     use crate::light::Point;
-    use crate::scene::{Light, Material};
+    use crate::scene::{Material, SceneLight};
     geometry.material = crate::scene::TriangleIds::constant(0, geometry.triangle_count());
     let (lo, hi) = geometry.world_bounds().unwrap_or((DVec3::ZERO, DVec3::ONE));
     let position = DVec3::new(
@@ -201,7 +201,7 @@ pub fn lit_scene(name: &str, mut geometry: Geometry) -> Scene {
         name: name.to_string(),
         materials: vec![Material::lambertian("grey", 0.5)],
         geometry,
-        lights: vec![Light::new(
+        lights: vec![SceneLight::new(
             "lights[0]",
             Point {
                 position,

@@ -1,6 +1,6 @@
 //! Random numbers: photon `i` of a run gets its own stream derived from (seed, i) alone
 //! ([`PhotonStreams`]), so results never depend on threads or scheduling; so do the eye
-//! pass's pixels and the direct light's replicates ([`photon_stream`]).
+//! pass's pixels and the direct light's replicates ([`stream`]).
 
 use rand::SeedableRng;
 use rand_pcg::Pcg32;
@@ -17,7 +17,7 @@ fn mix64(mut z: u64) -> u64 {
 /// eye-pass pixel's, a direct-light replicate's ([`direct_stream`]). The photon pass
 /// seeds its photons more cheaply ([`PhotonStreams`]).
 #[inline]
-pub fn photon_stream(seed: u64, index: u64) -> Pcg32 {
+pub fn stream(seed: u64, index: u64) -> Pcg32 {
     let state = mix64(seed ^ mix64(index.wrapping_add(GOLDEN_GAMMA)));
     let stream = mix64(state ^ 0x5851_f42d_4c95_7f2d);
     Pcg32::new(state, stream)
@@ -31,7 +31,7 @@ pub fn photon_stream(seed: u64, index: u64) -> Pcg32 {
 /// Photon i's PCG32 has stream (increment) i and a state hashed from (seed, i): output i
 /// of SplitMix64 started at a key hashed from the seed. Distinct increments keep every
 /// photon's sequence apart from every other's; the hashed state scatters where each one
-/// starts. Four 64-bit multiplies per photon, against seven for [`photon_stream`]
+/// starts. Four 64-bit multiplies per photon, against seven for [`stream`]
 /// (three SplitMix finalisers), whose chain of multiplies was the costliest part of
 /// emitting a photon.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -73,7 +73,7 @@ pub fn aux_stream(seed: u64) -> Pcg32 {
 /// and replicates below 2³².
 #[inline]
 pub fn direct_stream(seed: u64, cell: u64, replicate: u64) -> Pcg32 {
-    photon_stream(
+    stream(
         mix64(seed ^ 0x6a09_e667_f3bc_c909),
         (cell << 32) ^ replicate,
     )

@@ -231,7 +231,7 @@ fn embree_errors_become_err() {
 #[cfg(feature = "obvhs")]
 mod parity {
     use super::*;
-    use luxtally::accel::bvh::ObvhsScene;
+    use luxtally::accel::obvhs::ObvhsScene;
     use luxtally::fixtures::procedural_geometry;
 
     /// Distances agree to 1e-4 relative, or to 1e-6 of the scene's size (f32 positions
@@ -332,7 +332,7 @@ fn normal_of_square(backend: luxtally::accel::Backend, side_m: f64) -> [f32; 3] 
         .expect("square loads");
     let caster = luxtally::accel::build(backend, &scene.geometry).expect("backend builds");
     // The local frame is centred on the square; the ray starts at least 1 m above it
-    // (obvhs loses hits closer than ~10⁻⁹ m to the ray's origin, see accel/bvh.rs).
+    // (obvhs loses hits closer than ~10⁻⁹ m to the ray's origin, see accel/obvhs.rs).
     let s = side_m as f32;
     let mut rays = RayBatch::default();
     rays.push(

@@ -11,7 +11,7 @@ use glam::DVec3;
 use luxtally::accel::Backend;
 use luxtally::light::{BoundingSphere, Emitter, Incoming, Light};
 use luxtally::run::RunOptions;
-use luxtally::scene::{Estimator, Light as SceneLight};
+use luxtally::scene::{Estimator, SceneLight};
 use rand::Rng;
 use rand_pcg::Pcg32;
 use std::f64::consts::PI;

@@ -56,7 +56,7 @@ fn large_builds_defer_huge_pages_and_leave_them_on() {
     #[cfg(feature = "obvhs")]
     {
         let before = anon_huge_bytes();
-        let scene = luxtally::accel::bvh::ObvhsScene::new(&geometry);
+        let scene = luxtally::accel::obvhs::ObvhsScene::new(&geometry);
         let collapse = wait_for_collapse().expect("a large obvhs build starts a collapse");
         assert!(
             collapse.huge_bytes >= before + (32 << 20),
@@ -69,7 +69,7 @@ fn large_builds_defer_huge_pages_and_leave_them_on() {
     assert!(set_huge_pages(false));
     drop(EmbreeScene::new(&geometry).unwrap());
     #[cfg(feature = "obvhs")]
-    drop(luxtally::accel::bvh::ObvhsScene::new(&geometry));
+    drop(luxtally::accel::obvhs::ObvhsScene::new(&geometry));
     assert!(!huge_pages_enabled(), "the process's own choice must stand");
     assert_eq!(wait_for_collapse(), None);
     assert!(set_huge_pages(true));

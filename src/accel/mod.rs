@@ -1,13 +1,13 @@
 //! Ray casting: the one interface the tracer uses, with two backends behind it —
-//! Debian's Embree over FFI (`embree`) and pure-Rust obvhs (`bvh`, feature `obvhs`).
+//! Debian's Embree over FFI (`embree`) and pure-Rust obvhs (`obvhs`, feature `obvhs`).
 //!
 //! Rays and hits travel as structures of arrays (SoA) so batches map straight onto
 //! Embree's packets and streams. Coordinates are the scene's re-centred local frame (f32).
 
-#[cfg(feature = "obvhs")]
-pub mod bvh;
 pub mod embree;
 pub mod huge_pages;
+#[cfg(feature = "obvhs")]
+pub mod obvhs;
 
 use crate::scene::Geometry;
 use crate::{Error, Result};
@@ -396,7 +396,7 @@ pub fn build_with(
             "compact: only the embree backend has a compact BVH",
         )),
         #[cfg(feature = "obvhs")]
-        Backend::Obvhs => Ok(Box::new(bvh::ObvhsScene::new(geometry))),
+        Backend::Obvhs => Ok(Box::new(self::obvhs::ObvhsScene::new(geometry))),
         #[cfg(not(feature = "obvhs"))]
         Backend::Obvhs => Err(Error::Unsupported(
             "--backend obvhs: this build lacks the `obvhs` feature (cargo build --features obvhs)"

@@ -7,7 +7,7 @@
 
 use super::map::IndirectField;
 use crate::accel::{HitBatch, RayBatch, RayCaster};
-use crate::rng::photon_stream;
+use crate::rng;
 use crate::sampling::uniform;
 use crate::scene::{Camera, Scene};
 use crate::surface::{Bsdf, Incidence, LobeKind, Transport};
@@ -188,7 +188,7 @@ impl<'a> EyePass<'a> {
             s.shadow_gain.clear();
             for k in 0..s.rays.len() {
                 // (tile, ray in the queue, depth): unique below 2²⁷ tiles, 2³⁰ rays a
-                // queue and depths 0..=127 (max_depth ≤ 64 needs 7 bits); `photon_stream`
+                // queue and depths 0..=127 (max_depth ≤ 64 needs 7 bits); `rng::stream`
                 // mixes it.
                 let tile = (first / TILE_PIXELS) as u64;
                 let stream = tile << 37 | (k as u64 & ((1 << 30) - 1)) << 7 | depth as u64;
@@ -226,7 +226,7 @@ impl<'a> EyePass<'a> {
         for p in 0..count {
             let pixel = first + p;
             let (px, py) = ((pixel % w as usize) as f64, (pixel / w as usize) as f64);
-            let mut rng: Pcg32 = photon_stream(self.seed, pixel as u64);
+            let mut rng: Pcg32 = rng::stream(self.seed, pixel as u64);
             for k in 0..spp {
                 let (jx, jy) = if spp == 1 {
                     (0.5, 0.5)
@@ -321,7 +321,7 @@ impl<'a> EyePass<'a> {
     /// ray) like the area-source pattern).
     fn continue_path(&self, at: &Vertex, s: &mut Scratch) {
         let facing = at.inc.facing;
-        let new_rng = || photon_stream(self.seed ^ 0x5a5a_0000_5a5a_0000, at.stream);
+        let new_rng = || rng::stream(self.seed ^ 0x5a5a_0000_5a5a_0000, at.stream);
         at.bsdf
             .eye_continue(at.path.weight, &at.inc, &new_rng, &mut |c| {
                 if c.weight < MIN_WEIGHT {
@@ -391,7 +391,7 @@ impl<'a> EyePass<'a> {
                     diagonal,
                     (centre - pd).length(),
                 );
-                let mut rng = photon_stream(self.seed ^ 0xa5a5_a5a5_0000_0000, stream);
+                let mut rng = rng::stream(self.seed ^ 0xa5a5_a5a5_0000_0000, stream);
                 for k in 0..n * n {
                     let (i, j) = ((k / n) as f64, (k % n) as f64);
                     area_pattern.push((

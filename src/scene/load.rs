@@ -12,8 +12,8 @@ use super::file::{
 use super::mesh_io;
 use super::shapes::{self, Mesh, Transform};
 use super::{
-    Camera, Estimator, Geometry, Light, Material, Placement, PrototypeMesh, Quantity, Receiver,
-    Scene, Simulation,
+    Camera, Estimator, Geometry, Material, Placement, PrototypeMesh, Quantity, Receiver, Scene,
+    SceneLight, Simulation,
 };
 use crate::criteria::{self, StopCriteria};
 use crate::error::{Error, Result};
@@ -82,13 +82,13 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
 }
 
 /// The `[[lights]]` entries, each read by its kind (`crate::light`).
-fn lights(entries: Vec<toml::Value>, origin: &str, base_dir: &Path) -> Result<Vec<Light>> {
+fn lights(entries: Vec<toml::Value>, origin: &str, base_dir: &Path) -> Result<Vec<SceneLight>> {
     let mut lights = Vec::new();
     let mut cx = LoadContext::new(base_dir);
     for (i, value) in entries.into_iter().enumerate() {
         let label = format!("lights[{i}]");
         for (label, kind) in light::load_entry(value, &label, origin, &mut cx)? {
-            lights.push(Light { label, kind });
+            lights.push(SceneLight { label, kind });
         }
     }
     Ok(lights)

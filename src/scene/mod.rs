@@ -272,17 +272,28 @@ impl Geometry {
 }
 
 /// A light of the scene, as `crate::light` validated it (world coordinates).
-#[derive(Clone, Debug)]
-pub struct Light {
+#[derive(Clone)]
+pub struct SceneLight {
     /// `lights[i]` as in the scene file, for messages.
     pub label: String,
     /// The source: one of `crate::light`'s kinds, or any other implementation.
     pub kind: Arc<dyn crate::light::Light>,
 }
 
-impl Light {
-    pub fn new(label: impl Into<String>, kind: impl crate::light::Light) -> Light {
-        Light {
+/// Printed under the type's former name, `Light`: the print is part of the indirect
+/// map's scene fingerprint (`render::map`), which must not change with a rename.
+impl std::fmt::Debug for SceneLight {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Light")
+            .field("label", &self.label)
+            .field("kind", &self.kind)
+            .finish()
+    }
+}
+
+impl SceneLight {
+    pub fn new(label: impl Into<String>, kind: impl crate::light::Light) -> SceneLight {
+        SceneLight {
             label: label.into(),
             kind: Arc::new(kind),
         }
@@ -429,7 +440,7 @@ pub struct Scene {
     pub path: PathBuf,
     pub materials: Vec<Material>,
     pub geometry: Geometry,
-    pub lights: Vec<Light>,
+    pub lights: Vec<SceneLight>,
     pub receivers: Vec<Receiver>,
     pub simulation: Simulation,
     /// The `[camera]` of `luxtally render`, if the file has one.

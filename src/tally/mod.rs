@@ -5,9 +5,9 @@
 //! the chunks in photon order once per epoch, so the sums do not depend on the number of
 //! threads or on scheduling.
 
-pub(crate) mod receiver;
+pub(crate) mod receiver_grid;
 
-pub use receiver::ReceiverGrid;
+pub use receiver_grid::ReceiverGrid;
 
 /// What one fixed range of photons scored.
 #[derive(Clone, Debug, Default)]

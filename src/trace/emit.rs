@@ -156,7 +156,7 @@ mod tests {
     fn photons_are_shared_in_proportion_to_flux() {
         let mut scene = Scene::default();
         for intensity_cd in [1.0, 3.0] {
-            scene.lights.push(crate::scene::Light::new(
+            scene.lights.push(crate::scene::SceneLight::new(
                 "",
                 crate::light::Point {
                     position: DVec3::ZERO,

@@ -16,7 +16,7 @@
 pub mod direct;
 pub mod emit;
 pub mod endless;
-pub mod receiver;
+pub mod receiver_reach;
 pub mod scatter;
 
 use crate::accel::{HitBatch, RayBatch, RayCaster, Surface};
@@ -166,7 +166,7 @@ enum Segment {
     Emitted,
     /// At a diffuse or connectable glossy scattering: connected to next-event receivers
     /// beyond their near zone.
-    Diffuse,
+    Connectable,
     /// At a mirror, a refraction or a glossy lobe too sharp to connect.
     Specular,
 }
@@ -181,7 +181,7 @@ impl Segment {
             LobeKind::Specular => false,
         };
         if connected {
-            Segment::Diffuse
+            Segment::Connectable
         } else {
             Segment::Specular
         }
@@ -345,7 +345,7 @@ impl HitsOut<'_> {
         let survives = (rng.next_u32() as u64) < hit.surfacing.survives_below;
         let (point, facing) = (hit.point, hit.facing);
         self.survivors
-            .write(j, point, facing, hit.offset, Segment::Diffuse, rng);
+            .write(j, point, facing, hit.offset, Segment::Connectable, rng);
         self.diffuse_slot[c.diffuse] = j as u32;
         let kept = survives as usize;
         c.ended += !survives as u64;
@@ -829,7 +829,7 @@ impl<'a> Tracer<'a> {
             let scores = match segments[k] {
                 Segment::Emitted => !replicates,
                 Segment::Specular => true,
-                Segment::Diffuse => !connects || c.distance < r.near_zone_m,
+                Segment::Connectable => !connects || c.distance < r.near_zone_m,
             };
             if scores {
                 pending.push((offsets[k], c.cell, c.score_per_lm * flux));

@@ -280,7 +280,7 @@ pub fn bench_rays(
     if obvhs {
         progress("obvhs: BVH build");
         let (bvh, note) = timed_build("obvhs", || {
-            Ok(luxtally::accel::bvh::ObvhsScene::new(geometry))
+            Ok(luxtally::accel::obvhs::ObvhsScene::new(geometry))
         })?;
         builds.push(note);
         progress("obvhs: closest and occlusion rays");
@@ -408,7 +408,7 @@ fn c_columns(rust: f64, c: f64) -> String {
 /// occlusion).
 #[cfg(feature = "obvhs")]
 fn obvhs_row(
-    bvh: &luxtally::accel::bvh::ObvhsScene,
+    bvh: &luxtally::accel::obvhs::ObvhsScene,
     set: &RaySets,
     pool: &rayon::ThreadPool,
     out: &mut String,

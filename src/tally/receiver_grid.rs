@@ -1,6 +1,6 @@
 //! Receiver geometry, the *where* of a receiver's tally: which cell a point of it lies
 //! in, what light arriving in a given direction is worth to its quantity, and its
-//! points. How photons reach it (crossings, connections) is `trace::receiver`'s.
+//! points. How photons reach it (crossings, connections) is `trace::receiver_reach`'s.
 
 use crate::scene::{Estimator, Quantity, Receiver};
 use glam::DVec3;

@@ -4,7 +4,7 @@
 //! are `tally::ReceiverGrid`'s.
 
 use crate::sampling::{uniform, uniform_cone_band};
-use crate::tally::receiver::Kind;
+use crate::tally::receiver_grid::Kind;
 use crate::tally::ReceiverGrid;
 use glam::DVec3;
 use rand_pcg::Pcg32;
