@@ -143,11 +143,7 @@ impl From<Coords> for [f64; 3] {
 
 impl<'de> serde::Deserialize<'de> for Coords {
     fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Coords, D::Error> {
-        let a = <[f64; 3]>::deserialize(d)?;
-        match a.iter().find(|x| !(x.abs() <= MAX_COORDINATE_M)) {
-            Some(x) => Err(de::Error::custom(beyond_reach(format!("{x:e} m")))),
-            None => Ok(Coords(a)),
-        }
+        Ok(Coords(<[Length; 3]>::deserialize(d)?.map(|l| l.0)))
     }
 }
 

@@ -215,7 +215,8 @@ struct Carrier {
     scene: &'static str,
 }
 
-const MESH_SCENE: &str = r#"
+/// A grey floor and a receiver over it: what every carrier scene has.
+const FLOOR: &str = r#"
 [materials.grey]
 reflectance = 0.5
 [[objects]]
@@ -224,14 +225,6 @@ corner = [-5, -5, 0]
 u = [10, 0, 0]
 v = [0, 10, 0]
 material = "grey"
-[[objects]]
-file = "{FILE}"
-material = "grey"
-translate = [0, 0, 0.5]
-[[lights]]
-type = "point"
-position = [0.3, 0.2, 4]
-intensity_cd = 100
 [[receivers]]
 name = "floor"
 corner = [-2, -2, 0.001]
@@ -240,25 +233,24 @@ v = [0, 4, 0]
 cells = [8, 8]
 "#;
 
-const LUMINAIRE_SCENE: &str = r#"
-[materials.grey]
-reflectance = 0.5
+/// The floor with a mesh file (`{FILE}`) on it under a point light.
+const MESH_SCENE: &str = r#"
 [[objects]]
-shape = "rect"
-corner = [-5, -5, 0]
-u = [10, 0, 0]
-v = [0, 10, 0]
+file = "{FILE}"
 material = "grey"
+translate = [0, 0, 0.5]
+[[lights]]
+type = "point"
+position = [0.3, 0.2, 4]
+intensity_cd = 100
+"#;
+
+/// The floor under a luminaire read from `{FILE}`.
+const LUMINAIRE_SCENE: &str = r#"
 [[lights]]
 type = "luminaire"
 file = "{FILE}"
 position = [0, 0, 2.5]
-[[receivers]]
-name = "floor"
-corner = [-2, -2, 0.001]
-u = [4, 0, 0]
-v = [0, 4, 0]
-cells = [8, 8]
 "#;
 
 const CARRIERS: &[Carrier] = &[
@@ -393,7 +385,7 @@ fn file_case(n: usize, corpus: &[String]) -> Case {
         };
     }
     let file = format!("fuzzed_{name}");
-    let scene = carrier.scene.replace("{FILE}", &file);
+    let scene = format!("{FLOOR}{}", carrier.scene.replace("{FILE}", &file));
     Case {
         files: vec![(file, mutated), ("carrier.toml".into(), scene.into_bytes())],
         scene: "carrier.toml".into(),
@@ -529,7 +521,7 @@ fn corpus(scenes: &[(String, String)]) -> Vec<String> {
     scenes
         .iter()
         .map(|(_, t)| t.as_str())
-        .chain([MESH_SCENE, LUMINAIRE_SCENE])
+        .chain([FLOOR, MESH_SCENE, LUMINAIRE_SCENE])
         .flat_map(|t| t.lines().map(str::to_string))
         .filter(|l| !l.trim().is_empty())
         .collect()

@@ -252,7 +252,12 @@ impl Records {
         let mut dimension = |what: &str| -> Result<f64> {
             let (v, line) = t.number(what)?;
             if (v * unit_m).abs() > MAX_COORDINATE_M {
-                return Err(at(origin, line, format!("{what}: {}", beyond_reach(v))));
+                let metres = format!("{:e} m", v * unit_m);
+                return Err(at(
+                    origin,
+                    line,
+                    format!("{what}: {}", beyond_reach(metres)),
+                ));
             }
             Ok(v)
         };

@@ -152,12 +152,7 @@ struct MappedPart {
 
 impl GeometryBuilder {
     fn add(&mut self, mesh: Mesh, material: Vec<u32>, object: u32, at: &str) -> Result<()> {
-        if let Some(bad) = mesh.vertices.iter().find(|v| !input::within_reach(**v)) {
-            return Err(Error::input(
-                at,
-                input::beyond_reach(format!("vertex {bad} (after the transforms)")),
-            ));
-        }
+        check_reach(&mesh.vertices, at, "vertex", " (after the transforms)")?;
         // Geometry indexes vertices with u32.
         if self.mapped_vertices + mesh.vertices.len() > u32::MAX as usize {
             return Err(Error::input(
@@ -336,6 +331,27 @@ fn file_prototypes(
     Ok((protos, placements))
 }
 
+/// Refuses the first of `points` beyond [`input::MAX_COORDINATE_M`], naming `at`.
+fn check_reach(points: &[DVec3], at: &str, what: &str, note: &str) -> Result<()> {
+    match points.iter().find(|p| !input::within_reach(**p)) {
+        Some(bad) => Err(Error::input(
+            at,
+            input::beyond_reach(format!("{what} {bad}{note}")),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The eight corners of box `[lo, hi]`; an empty box (lo > hi) gives the origin.
+fn box_corners([lo, hi]: [DVec3; 2]) -> [DVec3; 8] {
+    if lo.x > hi.x {
+        return [DVec3::ZERO; 8];
+    }
+    std::array::from_fn(|k| {
+        DVec3::select(glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), hi, lo)
+    })
+}
+
 /// The corners of the box around `vertices` (lowest, highest).
 fn bounds_of(vertices: &[DVec3]) -> [DVec3; 2] {
     vertices
@@ -367,15 +383,8 @@ impl Placed {
         let object_tf = self.transform.affine();
         let base = builder.prototypes.len() as u32;
         let bounds: Vec<[DVec3; 2]> = prototypes.iter().map(|p| bounds_of(&p.vertices)).collect();
-        if let Some(bad) = prototypes
-            .iter()
-            .flat_map(|p| &p.vertices)
-            .find(|v| !input::within_reach(**v))
-        {
-            return Err(Error::input(
-                format!("{at}.file"),
-                input::beyond_reach(format!("vertex {bad}")),
-            ));
+        for p in &prototypes {
+            check_reach(&p.vertices, &format!("{at}.file"), "vertex", "")?;
         }
         builder.prototypes.extend(prototypes);
         for copy in &self.copies {
@@ -387,21 +396,9 @@ impl Placed {
                         "an instance transform is not finite or not invertible",
                     ));
                 }
-                let [lo, hi] = bounds[*proto as usize];
-                let empty = lo.x > hi.x;
-                if let Some(bad) = (0..8)
-                    .filter(|_| !empty)
-                    .map(|k| {
-                        DVec3::select(glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0), hi, lo)
-                    })
-                    .map(|corner| world.transform_point3(corner))
-                    .find(|p| !input::within_reach(*p))
-                {
-                    return Err(Error::input(
-                        at,
-                        input::beyond_reach(format!("a copy's bounding-box corner {bad}")),
-                    ));
-                }
+                let corners =
+                    box_corners(bounds[*proto as usize]).map(|c| world.transform_point3(c));
+                check_reach(&corners, at, "a copy's bounding-box corner", "")?;
                 builder.placements.push(Placement {
                     prototype: base + proto,
                     object: self.object,
@@ -427,12 +424,7 @@ impl Placed {
             .sum();
         builder.check_mapped(per_copy.saturating_mul(self.copies.len() as u64), at)?;
         let (mut mesh, per_tri) = flatten(prototypes, placements);
-        if let Some(bad) = mesh.vertices.iter().find(|v| !input::within_reach(**v)) {
-            return Err(Error::input(
-                format!("{at}.file"),
-                input::beyond_reach(format!("vertex {bad}")),
-            ));
-        }
+        check_reach(&mesh.vertices, &format!("{at}.file"), "vertex", "")?;
         self.transform.apply(&mut mesh.vertices);
         if self.copies.len() == 1 && self.copies[0] == DAffine3::IDENTITY {
             return builder.add(mesh, per_tri, self.object, at);
