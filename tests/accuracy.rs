@@ -91,7 +91,7 @@ fn global_odd_even_error_matches_the_actual_map_error() {
         let [a, b, c] = tri.map(|i| g.vertices[i as usize].as_dvec3() + g.origin);
         let exact = flux * solid_angle(a, b, c) / (4.0 * PI * g.area_m2(k)) + indirect;
         let e = triangle_illuminance_lx(
-            &result.tallies,
+            &result.progress.tallies,
             MapKind::Total,
             k,
             g.area_m2(k),

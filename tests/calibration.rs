@@ -47,7 +47,7 @@ fn study_run(
     let result = run(&s, &opts, &AtomicBool::new(false), &mut ()).expect("run succeeds");
     let state = result.state(&s, &opts);
     let summary = luxtally::output::summary::build(&state);
-    let t = &result.tallies;
+    let t = &result.progress.tallies;
     if seed == 1 {
         eprintln!(
             "{photons} photons: {} replicates, {} direct rays",
@@ -740,7 +740,7 @@ fn sphere_map_z(seeds: u64, split_vertices: bool, sigma: MapSigma) -> Vec<f64> {
             ..options(&s, 30_000, 2, Backend::Embree)
         };
         let result = run(&s, &opts, &AtomicBool::new(false), &mut ()).expect("run succeeds");
-        let t = &result.tallies;
+        let t = &result.progress.tallies;
         let rel = triangle_rel_errors(t, &g.triangles, &adjacent, |k| g.area_m2(k));
         let mut hits: Vec<u64> = (0..g.triangle_count())
             .map(|k| t.triangle_slots(k).iter().sum())
@@ -895,9 +895,12 @@ fn study_triangle_errors_cost() {
     let g = &s.geometry;
     let start = std::time::Instant::now();
     let adjacent = VertexFaces::by_position(&g.triangles, &g.vertices);
-    let rel = luxtally::stats::triangle_rel_errors(&result.tallies, &g.triangles, &adjacent, |k| {
-        g.area_m2(k)
-    });
+    let rel = luxtally::stats::triangle_rel_errors(
+        &result.progress.tallies,
+        &g.triangles,
+        &adjacent,
+        |k| g.area_m2(k),
+    );
     eprintln!(
         "triangle_rel_errors over {} triangles: {:.1} ms ({})",
         rel.len(),

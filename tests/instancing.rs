@@ -717,7 +717,7 @@ resolution = [3, 3]
         .expect("runs");
         let map = luxtally::output::IndirectMap::from_tallies(
             &s,
-            &result.tallies,
+            &result.progress.tallies,
             result.setup.total_flux_lm,
         );
         let caster = accel::build(Backend::Embree, &s.geometry).expect("builds");

@@ -277,7 +277,7 @@ fn scene_map_ply_reads_back_to_the_triangle_map() {
         );
         assert_eq!(vertices.len(), g.vertices.len());
         assert_eq!(faces.len(), g.triangle_count());
-        let t = state.tallies;
+        let t = &state.progress.tallies;
         let flux = state.setup.total_flux_lm;
         let adjacent =
             luxtally::scene::adjacency::VertexFaces::by_position(&g.triangles, &g.vertices);

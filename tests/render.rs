@@ -78,7 +78,7 @@ fn floor_under_point_source_shows_rho_i_cos_over_pi_r2() {
     // A lone plane: no photon comes back to it, so its indirect map is exactly zero.
     let options = RunOptions::with_photons(&s, 20_000);
     let result = run(&s, &options, &AtomicBool::new(false), &mut ()).unwrap();
-    let map = IndirectMap::from_tallies(&s, &result.tallies, result.setup.total_flux_lm);
+    let map = IndirectMap::from_tallies(&s, &result.progress.tallies, result.setup.total_flux_lm);
     assert!(map.face_lx.iter().all(|f| f == &[0.0, 0.0]));
     let r = render_with(&s, &map, Backend::Embree, 2);
     let c = s.camera.as_ref().unwrap();
@@ -259,9 +259,9 @@ fn closed_box_wall_shows_direct_plus_indirect_map() {
         ..RunOptions::with_photons(&s, 400_000)
     };
     let result = run(&s, &options, &AtomicBool::new(false), &mut ()).unwrap();
-    let map = IndirectMap::from_tallies(&s, &result.tallies, result.setup.total_flux_lm);
+    let map = IndirectMap::from_tallies(&s, &result.progress.tallies, result.setup.total_flux_lm);
     let stats = map_stats(
-        &result.tallies,
+        &result.progress.tallies,
         MapKind::Indirect,
         &s.geometry,
         result.setup.total_flux_lm,
@@ -348,7 +348,7 @@ fn office_image_is_stored_as_an_artifact() {
         ..RunOptions::with_photons(&s, 300_000)
     };
     let result = run(&s, &options, &AtomicBool::new(false), &mut ()).unwrap();
-    let map = IndirectMap::from_tallies(&s, &result.tallies, result.setup.total_flux_lm);
+    let map = IndirectMap::from_tallies(&s, &result.progress.tallies, result.setup.total_flux_lm);
     let r = render_with(&s, &map, Backend::Embree, 2);
     let dir = artifacts_dir().join("office_render");
     std::fs::create_dir_all(&dir).unwrap();
@@ -386,7 +386,7 @@ fn both_backends_give_the_same_image() {
         ..RunOptions::with_photons(&s, 100_000)
     };
     let result = run(&s, &options, &AtomicBool::new(false), &mut ()).unwrap();
-    let map = IndirectMap::from_tallies(&s, &result.tallies, result.setup.total_flux_lm);
+    let map = IndirectMap::from_tallies(&s, &result.progress.tallies, result.setup.total_flux_lm);
     let a = render_with(&s, &map, Backend::Embree, 2).image;
     let b = render_with(&s, &map, Backend::Obvhs, 2).image;
     // Hit points agree to f32 rounding; a pixel whose ray grazes an edge may see a

@@ -24,13 +24,13 @@ pub fn start(
         return Ok((start, None));
     };
     let (checkpoint, path) = Checkpoint::load(dir)?;
-    let start = start_from(&checkpoint, &path, scene, options, shard)?;
+    let start = start_from(checkpoint, &path, scene, options, shard)?;
     Ok((start, Some(path)))
 }
 
 /// [`start`] from `checkpoint`, read from `path`.
 fn start_from(
-    checkpoint: &Checkpoint,
+    checkpoint: Checkpoint<'static>,
     path: &Path,
     scene: &Scene,
     options: &RunOptions,
@@ -60,9 +60,10 @@ fn start_from(
             "differs from the checkpoint's shard or its --photons",
         ));
     }
-    let resumed = checkpoint.resumed().ok_or_else(|| {
+    let scene_path = checkpoint.scene_path.clone();
+    let resumed = checkpoint.into_progress().ok_or_else(|| {
         Error::input(
-            checkpoint.scene_path.clone(),
+            scene_path,
             "the checkpoint's cells are corrupt (they do not read back)",
         )
     })?;
@@ -98,8 +99,9 @@ fn shard_range(
 
 #[cfg(test)]
 mod tests {
-    use super::super::{fingerprint, pack_cells, Bytes, Numbers, SavedTallies};
+    use super::super::{pack_cells, Bytes, Numbers, SavedTallies};
     use super::*;
+    use crate::scene::fingerprint;
     use crate::tally::Tallies;
     use crate::trace::CHUNK_PHOTONS;
     use std::borrow::Cow;
@@ -118,7 +120,7 @@ mod tests {
         let cells = Bytes(pack_cells(&tallies.cells));
         let checkpoint = Checkpoint {
             scene_path: "s.toml".into(),
-            scene_fingerprint: fingerprint(&scene),
+            scene_fingerprint: fingerprint::run(&scene),
             numbers: Numbers::of(&options),
             photons_goal: Some(photons),
             shard,
@@ -169,7 +171,7 @@ mod tests {
     #[test]
     fn a_resumed_run_goes_on_from_the_checkpoint() {
         let (scene, options, c) = saved_run(10 * CHUNK_PHOTONS, CHUNK_PHOTONS, None);
-        let start = start_from(&c, Path::new("c.bin"), &scene, &options, None).unwrap();
+        let start = start_from(c.clone(), Path::new("c.bin"), &scene, &options, None).unwrap();
         assert_eq!(start.resumed.unwrap().tallies.photons, CHUNK_PHOTONS);
         assert!(start.shard.is_none());
     }
@@ -178,9 +180,15 @@ mod tests {
     fn a_whole_run_resumes_to_more_photons_never_fewer() {
         let (scene, mut options, c) = saved_run(10 * CHUNK_PHOTONS, 4 * CHUNK_PHOTONS, None);
         options.stop.photons = Some(20 * CHUNK_PHOTONS);
-        assert!(start_from(&c, Path::new("c.bin"), &scene, &options, None).is_ok());
+        assert!(start_from(c.clone(), Path::new("c.bin"), &scene, &options, None).is_ok());
         options.stop.photons = Some(3 * CHUNK_PHOTONS);
-        let e = refusal(start_from(&c, Path::new("c.bin"), &scene, &options, None));
+        let e = refusal(start_from(
+            c.clone(),
+            Path::new("c.bin"),
+            &scene,
+            &options,
+            None,
+        ));
         assert!(e.contains("--photons") && e.contains("fewer than"), "{e}");
     }
 
@@ -190,17 +198,17 @@ mod tests {
         let shard = ShardRange::new(0, 2, photons).unwrap();
         let (scene, mut options, c) = saved_run(photons, CHUNK_PHOTONS, Some(shard));
         let path = Path::new("c.bin");
-        let kept = start_from(&c, path, &scene, &options, None).unwrap();
+        let kept = start_from(c.clone(), path, &scene, &options, None).unwrap();
         assert_eq!(
             kept.shard,
             Some(shard),
             "the checkpoint's shard without --shard"
         );
-        assert!(start_from(&c, path, &scene, &options, Some("0/2")).is_ok());
-        let e = refusal(start_from(&c, path, &scene, &options, Some("1/2")));
+        assert!(start_from(c.clone(), path, &scene, &options, Some("0/2")).is_ok());
+        let e = refusal(start_from(c.clone(), path, &scene, &options, Some("1/2")));
         assert!(e.contains("differs from the checkpoint's shard"), "{e}");
         options.stop.photons = Some(photons + CHUNK_PHOTONS);
-        let e = refusal(start_from(&c, path, &scene, &options, None));
+        let e = refusal(start_from(c.clone(), path, &scene, &options, None));
         assert!(e.contains("--shard"), "{e}");
     }
 
@@ -208,7 +216,7 @@ mod tests {
     fn a_whole_run_does_not_resume_as_a_shard() {
         let (scene, options, c) = saved_run(10 * CHUNK_PHOTONS, CHUNK_PHOTONS, None);
         let e = refusal(start_from(
-            &c,
+            c.clone(),
             Path::new("c.bin"),
             &scene,
             &options,
@@ -221,11 +229,23 @@ mod tests {
     fn another_seed_or_scene_is_refused() {
         let (scene, mut options, mut c) = saved_run(10 * CHUNK_PHOTONS, CHUNK_PHOTONS, None);
         options.seed += 1;
-        let e = refusal(start_from(&c, Path::new("c.bin"), &scene, &options, None));
+        let e = refusal(start_from(
+            c.clone(),
+            Path::new("c.bin"),
+            &scene,
+            &options,
+            None,
+        ));
         assert!(e.contains("c.bin") && e.contains("seed"), "{e}");
         options.seed -= 1;
         c.scene_fingerprint ^= 1;
-        let e = refusal(start_from(&c, Path::new("c.bin"), &scene, &options, None));
+        let e = refusal(start_from(
+            c.clone(),
+            Path::new("c.bin"),
+            &scene,
+            &options,
+            None,
+        ));
         assert!(e.contains("the scene differs"), "{e}");
     }
 
@@ -233,7 +253,13 @@ mod tests {
     fn cells_that_do_not_read_back_are_refused() {
         let (scene, options, mut c) = saved_run(10 * CHUNK_PHOTONS, CHUNK_PHOTONS, None);
         c.tallies.cells = Bytes(vec![1, 2, 3]);
-        let e = refusal(start_from(&c, Path::new("c.bin"), &scene, &options, None));
+        let e = refusal(start_from(
+            c.clone(),
+            Path::new("c.bin"),
+            &scene,
+            &options,
+            None,
+        ));
         assert!(e.contains("s.toml") && e.contains("corrupt"), "{e}");
     }
 }

@@ -102,7 +102,8 @@ pub struct Luminaire {
     pub scale: f64,
 }
 
-/// Printed as `Luminaire(Luminaire { .. })`, as fingerprints have always read it.
+/// Printed as `Luminaire(Luminaire { .. })`: the print is part of the scene fingerprint
+/// (`scene::fingerprint`) that indirect_map.bin files, and their golden hashes, carry.
 impl std::fmt::Debug for Luminaire {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str("Luminaire(")?;

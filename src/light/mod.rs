@@ -4,8 +4,8 @@
 //! it).
 //!
 //! A source exists at two stages. [`Light`] is the validated source in world coordinates,
-//! as the scene holds it; its `Debug` print is its fingerprint (checkpoints and the eye
-//! pass's indirect-map key hash it), so derive it. [`Emitter`] is the same source
+//! as the scene holds it; its `Debug` print joins the scene fingerprint
+//! (`scene::fingerprint`: checkpoints and indirect_map.bin carry it), so derive it. [`Emitter`] is the same source
 //! prepared for the photon and eye passes in the scene's local frame (world = origin +
 //! local), with whatever it precomputes.
 //!

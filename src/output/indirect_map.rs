@@ -2,7 +2,7 @@
 //! the photon pass's tallies, and its file `indirect_map.bin`, which `render --from`
 //! reads to reuse a finished run.
 
-use crate::scene::Scene;
+use crate::scene::{fingerprint, Scene};
 use crate::stats::{triangle_face_illuminance_lx, MapKind};
 use crate::tally::Tallies;
 use crate::{Error, Result};
@@ -54,7 +54,7 @@ impl IndirectMap {
     }
 
     /// Writes the map: magic, then little-endian u64 triangle count, scene fingerprint
-    /// and photons, then f64 front and back illuminance per triangle.
+    /// (`scene::fingerprint::light_transport`) and photons, then f64 front and back illuminance per triangle.
     pub fn save(&self, path: &Path, scene: &Scene) -> Result<()> {
         let faces = self.face_lx.iter().copied();
         super::write_atomic(path, |w| {
@@ -77,7 +77,7 @@ impl IndirectMap {
         };
         let (triangles, fingerprint, photons) = (word(0), word(1), word(2));
         if triangles != scene.geometry.triangle_count() as u64
-            || fingerprint != scene_fingerprint(scene)
+            || fingerprint != fingerprint::light_transport(scene)
         {
             return Err(bad(&format!(
                 "was made for another scene (or the scene `{}` changed since): run the photon pass again",
@@ -134,7 +134,7 @@ fn write_map(
     faces: impl Iterator<Item = [f64; 2]>,
 ) -> std::io::Result<()> {
     w.write_all(MAGIC)?;
-    for x in [count as u64, scene_fingerprint(scene), photons] {
+    for x in [count as u64, fingerprint::light_transport(scene), photons] {
         w.write_all(&x.to_le_bytes())?;
     }
     for face in faces {
@@ -143,55 +143,4 @@ fn write_map(
         }
     }
     Ok(())
-}
-
-/// FNV-1a over what the map depends on: geometry (vertices, triangles, their materials,
-/// and the instanced objects that shadow them),
-/// materials and lights. The camera is left out: it does not change the map.
-pub fn scene_fingerprint(scene: &Scene) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    let mut eat = |bytes: &[u8]| {
-        for b in bytes {
-            h ^= *b as u64;
-            h = h.wrapping_mul(0x0100_0000_01b3);
-        }
-    };
-    let g = &scene.geometry;
-    for x in g.origin.to_array() {
-        eat(&x.to_le_bytes());
-    }
-    for v in &g.vertices {
-        for x in v.to_array() {
-            eat(&x.to_le_bytes());
-        }
-    }
-    for (t, m) in g.triangles.iter().zip(g.material.iter()) {
-        for i in t {
-            eat(&i.to_le_bytes());
-        }
-        eat(&m.to_le_bytes());
-    }
-    for p in &g.instanced.prototypes {
-        eat(&(p.triangles.len() as u64).to_le_bytes());
-        for v in &p.vertices {
-            for x in v.to_array() {
-                eat(&x.to_le_bytes());
-            }
-        }
-        for (t, m) in p.triangles.iter().zip(&p.material) {
-            for i in t {
-                eat(&i.to_le_bytes());
-            }
-            eat(&m.to_le_bytes());
-        }
-    }
-    for i in &g.instanced.instances {
-        eat(&i.prototype.to_le_bytes());
-        for x in i.to_local {
-            eat(&x.to_le_bytes());
-        }
-    }
-    eat(format!("{:?}", scene.materials).as_bytes());
-    eat(format!("{:?}", scene.lights).as_bytes());
-    h
 }

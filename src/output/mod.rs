@@ -196,7 +196,7 @@ fn write_run(out: &Path, state: &RunState<'_>, outputs: Outputs) -> Result<summa
         IndirectMap::save_from_tallies(
             &out.join(MAP_FILE),
             state.scene,
-            state.tallies,
+            &state.progress.tallies,
             state.setup.total_flux_lm,
         )?;
     }

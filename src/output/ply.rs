@@ -26,7 +26,7 @@ pub struct FaceMap {
 
 /// Total and indirect illuminance and relative error of every triangle.
 pub fn face_map(state: &RunState<'_>, adjacent: &VertexFaces) -> FaceMap {
-    let t = state.tallies;
+    let t = &state.progress.tallies;
     let g = &state.scene.geometry;
     let rel_errors = triangle_rel_errors(t, &g.triangles, adjacent, |k| g.area_m2(k));
     let mut m = FaceMap {

@@ -203,7 +203,7 @@ pub struct ForecastSummary {
 /// Builds the summary of a run's current state.
 pub fn build(state: &RunState<'_>) -> Summary {
     let scene = state.scene;
-    let t = state.tallies;
+    let t = &state.progress.tallies;
     let receivers = scene
         .receivers
         .iter()
@@ -213,8 +213,8 @@ pub fn build(state: &RunState<'_>) -> Summary {
         .collect();
     // A share of the run's time; 0 before any time has passed.
     let share = |part_s: f64| {
-        if state.elapsed_s > 0.0 {
-            part_s / state.elapsed_s
+        if state.progress.times.elapsed_s > 0.0 {
+            part_s / state.progress.times.elapsed_s
         } else {
             0.0
         }
@@ -230,7 +230,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
     let global_sigma_rel = global.mean_sigma_lx / global.mean_illuminance_lx;
     // The last epoch's error is the target's relative error now, unless it was absolute
     // or the tallies moved on since (a merge): then computed again.
-    let target_sigma_rel = match state.history.last() {
+    let target_sigma_rel = match state.progress.history.last() {
         Some(p) if !state.options.stop.absolute && p.photons == t.photons => p.rel_error,
         _ => crate::run::target_error(scene, state.target, t, state.setup.total_flux_lm, false),
     };
@@ -243,7 +243,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
         photons_emitted: t.photons,
         rays_traced: t.rays,
         direct_replicates: t.direct_replicates,
-        elapsed_s: state.elapsed_s,
+        elapsed_s: state.progress.times.elapsed_s,
         setup_s: state.setup.setup_s,
         stop_reason: state.stop_reason.map(|r| r.as_str().to_string()),
         total_flux_lm: state.setup.total_flux_lm,
@@ -263,25 +263,23 @@ pub fn build(state: &RunState<'_>) -> Summary {
         photons_killed_by_bounce_cap: t.killed_by_bounce_cap,
         bounce_cap_bias_bound: cap_bound,
         direct_rays: t.direct_rays,
-        direct_s: state.direct_s,
-        stats_s: state.stats_s,
-        merge_s: state.merge_s,
-        merge_share: share(state.merge_s),
-        stats_share: share(state.stats_s),
+        direct_s: state.progress.times.direct_s,
+        stats_s: state.progress.times.stats_s,
+        merge_s: state.progress.times.merge_s,
+        merge_share: share(state.progress.times.merge_s),
+        stats_share: share(state.progress.times.stats_s),
         receivers,
-        reliability: reliability(state.history, target_vov(state))
+        reliability: reliability(&state.progress.history, target_vov(state))
             .with_bounce_cap(cap_bound, &[target_sigma_rel, global_sigma_rel]),
         global,
-        history: state.history.to_vec(),
+        history: state.progress.history.to_vec(),
         target_unreachable: crate::run::target_unreachable(
             scene,
             state.options,
             state.target,
-            t,
-            state.history,
-            state.forecast,
+            state.progress,
         ),
-        forecast: match (state.options.stop.target_error, state.forecast) {
+        forecast: match (state.options.stop.target_error, state.progress.forecast) {
             (Some(target_error), Some(f)) => Some(ForecastSummary {
                 target_error,
                 predicted_total_s: f.total_s,
@@ -294,7 +292,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
 
 /// Receiver `index`'s summary, scored by `estimator`.
 fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> ReceiverSummary {
-    let t = state.tallies;
+    let t = &state.progress.tallies;
     let r = &state.scene.receivers[index];
     let cells = t.receiver_cells(&state.scene.receivers, index);
     let stats = receiver_stats(cells, r.cells, t.counts(), None);
@@ -328,7 +326,7 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
         rel_error: stats.rel_error,
         rel_error_known_cells: stats.rel_error_known,
         unknown_cells: stats.unknown_cells,
-        fom: figure_of_merit(stats.rel_error.quadratic, state.elapsed_s),
+        fom: figure_of_merit(stats.rel_error.quadratic, state.progress.times.elapsed_s),
         max_vov,
         scoring_histories: stats.scoring_histories,
         vov: stats.vov,
@@ -343,7 +341,7 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
 
 /// The scene map's summary: total and indirect illuminance over every triangle.
 fn global(state: &RunState<'_>) -> GlobalSummary {
-    let (t, g) = (state.tallies, &state.scene.geometry);
+    let (t, g) = (&state.progress.tallies, &state.scene.geometry);
     let flux_lm = state.setup.total_flux_lm;
     let total = map_stats(t, MapKind::Total, g, flux_lm);
     let indirect = map_stats(t, MapKind::Indirect, g, flux_lm);
@@ -392,7 +390,7 @@ fn luminaires(scene: &crate::scene::Scene) -> Vec<LuminaireSummary> {
 /// the 90th percentile, so a few sparse cells at the receiver's edge do not mark the
 /// mean error unreliable; for the scene map, the VOV of its mean.
 fn target_vov(state: &RunState<'_>) -> f64 {
-    let t = state.tallies;
+    let t = &state.progress.tallies;
     let receivers = &state.scene.receivers;
     let Some(r) = state.target.receiver() else {
         return mean_illuminance_vov(t);

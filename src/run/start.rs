@@ -2,8 +2,7 @@
 //! state, the whole photon range or one shard's, on this process or shared with others.
 
 use crate::distributed::Distributor;
-use crate::stats::forecast::HistoryPoint;
-use crate::tally::{CellPartial, ChunkTally, Tallies};
+use crate::tally::{CellPartial, ChunkTally};
 use crate::trace::CHUNK_PHOTONS;
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -83,39 +82,12 @@ impl ChunkRecord {
     }
 }
 
-/// A run's state to go on from.
-pub struct Resumed {
-    pub tallies: Tallies,
-    pub history: Vec<HistoryPoint>,
-    pub direct_per_photon: f64,
-    pub elapsed_s: f64,
-    pub stats_s: f64,
-    pub merge_s: f64,
-    pub direct_s: f64,
-    pub chunks: Vec<ChunkRecord>,
-}
-
-impl Resumed {
-    /// The state of a run that has traced nothing yet.
-    pub fn fresh(tallies: Tallies) -> Resumed {
-        Resumed {
-            tallies,
-            history: Vec::new(),
-            direct_per_photon: 0.0,
-            elapsed_s: 0.0,
-            stats_s: 0.0,
-            merge_s: 0.0,
-            direct_s: 0.0,
-            chunks: Vec::new(),
-        }
-    }
-}
-
 /// Where a run starts, which photons it traces and who traces them (see
 /// [`run_from`](super::run_from)).
 #[derive(Default)]
 pub struct Start {
-    pub resumed: Option<Resumed>,
+    /// A checkpoint's record to go on from.
+    pub resumed: Option<super::Progress>,
     pub shard: Option<ShardRange>,
     /// Other processes sharing the chunks (MPI).
     pub distributor: Option<Box<dyn Distributor>>,

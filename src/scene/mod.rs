@@ -11,6 +11,7 @@ use std::sync::Arc;
 
 pub mod adjacency;
 pub mod file;
+pub mod fingerprint;
 mod load;
 mod material;
 pub mod mesh_io;
@@ -280,8 +281,9 @@ pub struct SceneLight {
     pub kind: Arc<dyn crate::light::Light>,
 }
 
-/// Printed under the type's former name, `Light`: the print is part of the indirect
-/// map's scene fingerprint (`render::map`), which must not change with a rename.
+/// Printed as `Light { label, kind }`: the print is part of the scene fingerprint
+/// (`fingerprint::light_transport`) that indirect_map.bin files carry, and the golden
+/// hashes of those files (tests/data/golden_outputs.txt) hold it.
 impl std::fmt::Debug for SceneLight {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Light")

@@ -58,7 +58,8 @@ pub fn command(args: MergeArgs) -> Result<()> {
     std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
     let setup = Instant::now();
     let caster = accel::build_with(options.backend, options.bvh, &scene.geometry)?;
-    let result = luxtally::checkpoint::merge(&scene, &options, caster.as_ref(), setup, shards)?;
+    let result =
+        luxtally::checkpoint::merge_shards(&scene, &options, caster.as_ref(), setup, shards)?;
     let state = result.state(&scene, &options);
     let finished = Finished {
         run: Some(&state),
@@ -68,7 +69,7 @@ pub fn command(args: MergeArgs) -> Result<()> {
     println!(
         "merged {} shards: {} photons; results in {}",
         args.dirs.len(),
-        result.tallies.photons,
+        result.progress.tallies.photons,
         out.display()
     );
     Ok(())

@@ -69,7 +69,7 @@ impl Observer for CliObserver {
     fn epoch(&mut self, state: &RunState<'_>) {
         self.progress.set(per_mille(state), || progress_line(state));
         // A shard's tallies alone are no result: its checkpoint is its only output.
-        let shard = state.resumable.shard.is_some();
+        let shard = state.progress.shard.is_some();
         if !shard
             && state.stop_reason.is_none()
             && self.last_save.elapsed().as_secs_f64() >= SAVE_EVERY_S
@@ -100,14 +100,21 @@ impl Observer for CliObserver {
 /// Seconds until the run's first stop criterion is met, as far as they can be told: the
 /// accuracy forecast, the photons left at the current rate, the time limit.
 fn remaining_s(state: &RunState<'_>) -> Option<f64> {
-    let rate = state.tallies.photons as f64 / state.elapsed_s.max(1e-9);
-    let by_forecast = state.forecast.map(|f| f.total_s - state.elapsed_s);
+    let rate = state.progress.tallies.photons as f64 / state.progress.times.elapsed_s.max(1e-9);
+    let by_forecast = state
+        .progress
+        .forecast
+        .map(|f| f.total_s - state.progress.times.elapsed_s);
     let by_photons = state
         .options
         .stop
         .photons
-        .map(|n| n.saturating_sub(state.tallies.photons) as f64 / rate);
-    let by_time = state.options.stop.time_limit_s.map(|t| t - state.elapsed_s);
+        .map(|n| n.saturating_sub(state.progress.tallies.photons) as f64 / rate);
+    let by_time = state
+        .options
+        .stop
+        .time_limit_s
+        .map(|t| t - state.progress.times.elapsed_s);
     [by_forecast, by_photons, by_time]
         .into_iter()
         .flatten()
@@ -119,7 +126,11 @@ fn remaining_s(state: &RunState<'_>) -> Option<f64> {
 /// The progress line: elapsed time, the target's error → its goal and when the run
 /// should end first (what a narrow terminal cuts is the rest: photons, ray rate).
 fn progress_line(state: &RunState<'_>) -> String {
-    let error = state.history.last().map_or(f64::NAN, |p| p.rel_error);
+    let error = state
+        .progress
+        .history
+        .last()
+        .map_or(f64::NAN, |p| p.rel_error);
     let unit = if state.options.stop.absolute {
         ""
     } else {
@@ -141,30 +152,27 @@ fn progress_line(state: &RunState<'_>) -> String {
         (None, Some(r)) => format!(", done in ~{r:.1} s"),
         (None, None) => String::new(),
     };
-    let unreachable = luxtally::run::target_unreachable(
-        state.scene,
-        state.options,
-        state.target,
-        state.tallies,
-        state.history,
-        state.forecast,
-    )
-    .map(|why| format!(", target unreachable: {why}"))
-    .unwrap_or_default();
+    let unreachable =
+        luxtally::run::target_unreachable(state.scene, state.options, state.target, state.progress)
+            .map(|why| format!(", target unreachable: {why}"))
+            .unwrap_or_default();
     format!(
         "{:.1} s  {}: {:.3}{unit}{goal}{eta}{unreachable}  {} photons  {:.1} Mrays/s",
-        state.elapsed_s,
+        state.progress.times.elapsed_s,
         state.target.describe(&state.scene.receivers),
         error * scale,
-        state.tallies.photons,
-        state.tallies.rays as f64 / state.elapsed_s.max(1e-9) / 1e6,
+        state.progress.tallies.photons,
+        state.progress.tallies.rays as f64 / state.progress.times.elapsed_s.max(1e-9) / 1e6,
     )
 }
 
 /// How far the run is, in thousandths, by its nearest stop criterion.
 fn per_mille(state: &RunState<'_>) -> u64 {
     match remaining_s(state) {
-        Some(r) => (PER_MILLE as f64 * state.elapsed_s / (state.elapsed_s + r).max(1e-9)) as u64,
+        Some(r) => {
+            (PER_MILLE as f64 * state.progress.times.elapsed_s
+                / (state.progress.times.elapsed_s + r).max(1e-9)) as u64
+        }
         None => 0,
     }
 }

@@ -102,7 +102,7 @@ pub fn finish_run(
     result: &RunResult,
     outputs: Outputs,
 ) -> Result<()> {
-    if result.shard.is_none() {
+    if result.progress.shard.is_none() {
         let state = result.state(scene, options);
         let finished = Finished {
             run: Some(&state),

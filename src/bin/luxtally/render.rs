@@ -78,7 +78,7 @@ fn render_into(
         None => {
             let result = photon_pass(&args.run, scene, options, caster.as_ref(), setup, out, None)?;
             finish_run(&args.run, out, scene, options, &result, outputs)?;
-            IndirectMap::from_tallies(scene, &result.tallies, result.setup.total_flux_lm)
+            IndirectMap::from_tallies(scene, &result.progress.tallies, result.setup.total_flux_lm)
         }
     };
     let pixels = camera.resolution.map(u64::from).iter().product::<u64>();

@@ -100,7 +100,7 @@ fn bench_accuracy(
         100.0 * target
     );
     let _ = writeln!(out, "{}\n", run_line(&result, &summary));
-    let h = &result.history;
+    let h = &result.progress.history;
     let _ = writeln!(out, "Time to accuracy: {}.\n", times_to_accuracy(h));
     if let Some(line) = forecast_check(h) {
         let _ = writeln!(out, "{line}\n");
@@ -112,21 +112,21 @@ fn bench_accuracy(
 /// How the run of `bench_accuracy` went: stop, times, counts, the statistics' share of
 /// the run, FOM and VOV.
 fn run_line(result: &RunResult, summary: &Summary) -> String {
-    let share = |s: f64| 100.0 * s / result.elapsed_s.max(1e-9);
+    let share = |s: f64| 100.0 * s / result.progress.times.elapsed_s.max(1e-9);
     format!(
         "Stopped on {} after {:.3} s (set-up {:.3} s), {} photons, {} rays; direct light {:.3} s ({} replicates, {} shadow rays); statistics and forecasts {:.4} s = {:.3} % of the run; merging {:.4} s = {:.3} %; FOM {:.0} (stable: {}), VOV {:.4}.",
         result.stop_reason.as_str(),
-        result.elapsed_s,
+        result.progress.times.elapsed_s,
         result.setup.setup_s,
-        result.tallies.photons,
-        result.tallies.rays,
-        result.direct_s,
-        result.tallies.direct_replicates,
-        result.tallies.direct_rays,
-        result.stats_s,
-        share(result.stats_s),
-        result.merge_s,
-        share(result.merge_s),
+        result.progress.tallies.photons,
+        result.progress.tallies.rays,
+        result.progress.times.direct_s,
+        result.progress.tallies.direct_replicates,
+        result.progress.tallies.direct_rays,
+        result.progress.times.stats_s,
+        share(result.progress.times.stats_s),
+        result.progress.times.merge_s,
+        share(result.progress.times.merge_s),
         summary.reliability.fom,
         summary.reliability.fom_stable,
         summary.reliability.vov,

@@ -93,11 +93,11 @@ fn bench_photons(
         };
         progress(&format!("{photons} photons, {t} threads"));
         let result = run(scene, &options, &AtomicBool::new(false), &mut ())?;
-        let traced = result.tallies.rays as f64 / result.elapsed_s / 1e6;
+        let traced = result.progress.tallies.rays as f64 / result.progress.times.elapsed_s / 1e6;
         let _ = writeln!(
             out,
             "| {t} | {raw:.2} | {traced:.2} | {:.2} M | {:.2} |",
-            result.tallies.photons as f64 / result.elapsed_s / 1e6,
+            result.progress.tallies.photons as f64 / result.progress.times.elapsed_s / 1e6,
             traced / raw
         );
     }

@@ -339,7 +339,7 @@ fn bench_scale_case(
         bytes_per_triangle: (peak_rss_mib - rss_before_mib) * 1048576.0
             / triangles_stored.max(1) as f64,
         mrays_per_s,
-        photons_per_s: result.tallies.photons as f64 / result.elapsed_s,
+        photons_per_s: result.progress.tallies.photons as f64 / result.progress.times.elapsed_s,
         output_s,
         output_bytes,
         peak_rss_with_outputs_mib: memory_mib().1,
