@@ -6,6 +6,7 @@
 
 use super::shapes::Mesh;
 use crate::error::{Error, Result};
+use crate::input::one_line;
 use glam::{DMat4, DQuat, DVec3};
 use std::borrow::Cow;
 use std::path::Path;
@@ -100,12 +101,13 @@ pub fn load_mesh_parts(path: &Path, origin: &str) -> Result<MeshParts> {
             format!("cannot read mesh file {}: {e}", path.display()),
         )
     })?;
-    let shown = path.display().to_string();
-    let fail =
-        |msg: String| Error::input(origin, format!("{shown}: {}", super::file::one_line(&msg)));
+    let at = Culprit {
+        origin,
+        file: path.display().to_string(),
+    };
     let out = match ext.as_str() {
         "obj" => {
-            let file = load_obj(&bytes, path).map_err(fail)?;
+            let file = load_obj(&bytes, path, &at)?;
             MeshParts {
                 prototypes: vec![(file.mesh, file.material)],
                 placements: vec![(0, DMat4::IDENTITY)],
@@ -113,22 +115,33 @@ pub fn load_mesh_parts(path: &Path, origin: &str) -> Result<MeshParts> {
                 missing_reason: file.missing_reason,
             }
         }
-        "gltf" | "glb" => load_gltf(&bytes, path).map_err(fail)?,
-        _ => {
-            return Err(Error::input(
-                origin,
-                format!("{shown}: unsupported mesh format (expected .obj, .gltf or .glb)"),
-            ))
-        }
+        "gltf" | "glb" => load_gltf(&bytes, path, &at)?,
+        _ => return Err(at.error("unsupported mesh format (expected .obj, .gltf or .glb)")),
     };
     Ok(out)
 }
 
-fn check_vertex(p: DVec3) -> std::result::Result<DVec3, String> {
+/// The mesh file an error is about: the scene key that names it (`objects[2].file`) and
+/// its path, so every message from the readers below is one line naming both.
+struct Culprit<'a> {
+    origin: &'a str,
+    file: String,
+}
+
+impl Culprit<'_> {
+    fn error(&self, message: impl std::fmt::Display) -> Error {
+        Error::input(
+            self.origin,
+            format!("{}: {}", self.file, one_line(&message.to_string())),
+        )
+    }
+}
+
+fn check_vertex(p: DVec3, at: &Culprit) -> Result<DVec3> {
     if p.is_finite() {
         Ok(p)
     } else {
-        Err(format!("vertex {p} is not finite"))
+        Err(at.error(format!("vertex {p} is not finite")))
     }
 }
 
@@ -173,17 +186,17 @@ fn f32_at(c: &[u8], k: usize) -> f32 {
     f32::from_bits(u32_at(c, k))
 }
 
-fn whole_triangles(indices: usize) -> std::result::Result<(), String> {
+fn whole_triangles(indices: usize, at: &Culprit) -> Result<()> {
     if indices.is_multiple_of(3) {
         Ok(())
     } else {
-        Err(format!(
+        Err(at.error(format!(
             "{indices} indices is not a whole number of triangles"
-        ))
+        )))
     }
 }
 
-fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> {
+fn load_obj(bytes: &[u8], path: &Path, at: &Culprit) -> Result<MeshFile> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -195,7 +208,7 @@ fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> 
     let mut reader = std::io::Cursor::new(bytes);
     let (models, materials) =
         tobj::load_obj_buf(&mut reader, &options, |mtl| tobj::load_mtl(dir.join(mtl)))
-            .map_err(|e| format!("malformed OBJ: {e}"))?;
+            .map_err(|e| at.error(format!("malformed OBJ: {e}")))?;
 
     let mut out = MeshFile::default();
     // MTL problems only matter when no `material` override is given, so keep the reason.
@@ -210,7 +223,7 @@ fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> 
         }
     };
     for model in &models {
-        add_obj_model(&mut out, model, mtl_ok)?;
+        add_obj_model(&mut out, model, mtl_ok, at)?;
     }
     Ok(out)
 }
@@ -252,19 +265,20 @@ fn add_obj_model(
     out: &mut MeshFile,
     model: &tobj::Model,
     mtl_ok: bool,
-) -> std::result::Result<(), String> {
+    at: &Culprit,
+) -> Result<()> {
     let m = &model.mesh;
     if !m.positions.len().is_multiple_of(3) || !m.indices.len().is_multiple_of(3) {
-        return Err(format!(
+        return Err(at.error(format!(
             "malformed OBJ: model `{}` is incomplete",
             model.name
-        ));
+        )));
     }
     let base = out.mesh.vertices.len();
     let count = m.positions.len() / 3;
     for p in m.positions.chunks_exact(3) {
         let v = DVec3::new(p[0].into(), p[1].into(), p[2].into());
-        out.mesh.vertices.push(check_vertex(v)?);
+        out.mesh.vertices.push(check_vertex(v, at)?);
     }
     let material = match m.material_id {
         Some(id) if mtl_ok => match out.materials.get(id) {
@@ -288,14 +302,13 @@ fn add_obj_model(
         let mut tri = [0u32; 3];
         for (slot, &i) in tri.iter_mut().zip(t) {
             if i as usize >= count {
-                return Err(format!(
+                return Err(at.error(format!(
                     "malformed OBJ: face index {} out of range in `{}`",
                     i + 1,
                     model.name
-                ));
+                )));
             }
-            *slot =
-                u32::try_from(base + i as usize).map_err(|_| "too many vertices".to_string())?;
+            *slot = u32::try_from(base + i as usize).map_err(|_| at.error("too many vertices"))?;
         }
         out.mesh.triangles.push(tri);
         out.material.push(material);
@@ -309,38 +322,38 @@ fn buffer_data<'a>(
     buffer: &gltf::Buffer,
     blob: Option<&'a [u8]>,
     dir: &Path,
-) -> std::result::Result<Cow<'a, [u8]>, String> {
+    at: &Culprit,
+) -> Result<Cow<'a, [u8]>> {
+    let index = buffer.index();
     let data: Cow<[u8]> = match buffer.source() {
         gltf::buffer::Source::Bin => blob
-            .ok_or_else(|| format!("buffer {} refers to a missing GLB chunk", buffer.index()))?
+            .ok_or_else(|| at.error(format!("buffer {index} refers to a missing GLB chunk")))?
             .into(),
         gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
             use base64::Engine;
             let (_, payload) = uri.split_once(";base64,").ok_or_else(|| {
-                format!(
-                    "buffer {}: only base64 data URIs are supported",
-                    buffer.index()
-                )
+                at.error(format!(
+                    "buffer {index}: only base64 data URIs are supported"
+                ))
             })?;
             base64::engine::general_purpose::STANDARD
                 .decode(payload)
-                .map_err(|e| format!("buffer {}: bad base64 ({e})", buffer.index()))?
+                .map_err(|e| at.error(format!("buffer {index}: bad base64 ({e})")))?
                 .into()
         }
         gltf::buffer::Source::Uri(uri) => {
             let file = dir.join(uri);
             std::fs::read(&file)
-                .map_err(|e| format!("buffer {}: {}: {e}", buffer.index(), file.display()))?
+                .map_err(|e| at.error(format!("buffer {index}: {}: {e}", file.display())))?
                 .into()
         }
     };
     if data.len() < buffer.length() {
-        return Err(format!(
-            "buffer {} holds {} bytes, fewer than its byteLength {}",
-            buffer.index(),
+        return Err(at.error(format!(
+            "buffer {index} holds {} bytes, fewer than its byteLength {}",
             data.len(),
             buffer.length()
-        ));
+        )));
     }
     Ok(data)
 }
@@ -352,33 +365,34 @@ fn check_accessor(
     what: &str,
     dims: gltf::accessor::Dimensions,
     types: &[gltf::accessor::DataType],
-) -> std::result::Result<(), String> {
+    at: &Culprit,
+) -> Result<()> {
     let id = accessor.index();
     if accessor.dimensions() != dims || !types.contains(&accessor.data_type()) {
-        return Err(format!(
+        return Err(at.error(format!(
             "accessor {id} ({what}) has type {:?} {:?}",
             accessor.dimensions(),
             accessor.data_type()
-        ));
+        )));
     }
     if accessor.sparse().is_some() {
-        return Err(format!(
+        return Err(at.error(format!(
             "accessor {id} ({what}): sparse accessors are not supported"
-        ));
+        )));
     }
     let view = accessor
         .view()
-        .ok_or_else(|| format!("accessor {id} ({what}) has no buffer view"))?;
+        .ok_or_else(|| at.error(format!("accessor {id} ({what}) has no buffer view")))?;
     if let Some(stride) = view.stride() {
         if stride < accessor.size() {
-            return Err(format!("accessor {id} ({what}): stride {stride} too small"));
+            return Err(at.error(format!("accessor {id} ({what}): stride {stride} too small")));
         }
     }
     if accessor.count() == 0 || accessor.count() > view.length() {
-        return Err(format!(
+        return Err(at.error(format!(
             "accessor {id} ({what}): bad count {}",
             accessor.count()
-        ));
+        )));
     }
     Ok(())
 }
@@ -420,15 +434,17 @@ struct GltfWalk<'a> {
     /// Nodes on the current path from the root, to reject cycles.
     stack: Vec<usize>,
     doc: &'a gltf::Document,
+    at: &'a Culprit<'a>,
 }
 
 /// The JSON and the binary chunk of a glTF file, borrowed: a GLB's two chunks, or the
 /// whole file as JSON. (`gltf::Gltf::from_slice` would copy a GLB's binary chunk.)
 type GltfChunks<'a> = (Cow<'a, [u8]>, Option<Cow<'a, [u8]>>);
 
-fn gltf_chunks(bytes: &[u8]) -> std::result::Result<GltfChunks<'_>, String> {
+fn gltf_chunks<'b>(bytes: &'b [u8], at: &Culprit) -> Result<GltfChunks<'b>> {
     if bytes.starts_with(b"glTF") {
-        let glb = gltf::Glb::from_slice(bytes).map_err(|e| format!("malformed glTF: {e}"))?;
+        let glb =
+            gltf::Glb::from_slice(bytes).map_err(|e| at.error(format!("malformed glTF: {e}")))?;
         Ok((glb.json, glb.bin))
     } else {
         Ok((bytes.into(), None))
@@ -437,17 +453,17 @@ fn gltf_chunks(bytes: &[u8]) -> std::result::Result<GltfChunks<'_>, String> {
 
 /// gltf-json 1.4.1's validation indexes `accessors[POSITION]` before checking that the
 /// index exists, and panics on a bad one: check that first on the unvalidated JSON.
-fn precheck_gltf(json: &[u8]) -> std::result::Result<gltf::json::Root, String> {
-    let root: gltf::json::Root =
-        gltf::json::deserialize::from_slice(json).map_err(|e| format!("malformed glTF: {e}"))?;
+fn precheck_gltf(json: &[u8], at: &Culprit) -> Result<gltf::json::Root> {
+    let root: gltf::json::Root = gltf::json::deserialize::from_slice(json)
+        .map_err(|e| at.error(format!("malformed glTF: {e}")))?;
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             for accessor in primitive.attributes.values() {
                 if accessor.value() >= root.accessors.len() {
-                    return Err(format!(
+                    return Err(at.error(format!(
                         "malformed glTF: meshes[{m}].primitives[{p}] refers to missing accessor {}",
                         accessor.value()
-                    ));
+                    )));
                 }
             }
         }
@@ -455,19 +471,19 @@ fn precheck_gltf(json: &[u8]) -> std::result::Result<gltf::json::Root, String> {
     Ok(root)
 }
 
-fn load_gltf(bytes: &[u8], path: &Path) -> std::result::Result<MeshParts, String> {
-    let (json, blob) = gltf_chunks(bytes)?;
-    let gltf = gltf::Document::from_json(precheck_gltf(&json)?)
-        .map_err(|e| format!("malformed glTF: {e}"))?;
+fn load_gltf(bytes: &[u8], path: &Path, at: &Culprit) -> Result<MeshParts> {
+    let (json, blob) = gltf_chunks(bytes, at)?;
+    let gltf = gltf::Document::from_json(precheck_gltf(&json, at)?)
+        .map_err(|e| at.error(format!("malformed glTF: {e}")))?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let buffers = gltf
         .buffers()
-        .map(|b| buffer_data(&b, blob.as_deref(), dir))
-        .collect::<std::result::Result<Vec<_>, _>>()?;
+        .map(|b| buffer_data(&b, blob.as_deref(), dir, at))
+        .collect::<Result<Vec<_>>>()?;
     let scene = gltf
         .default_scene()
         .or_else(|| gltf.scenes().next())
-        .ok_or("the glTF file has no scene")?;
+        .ok_or_else(|| at.error("the glTF file has no scene"))?;
     let mut walk = GltfWalk {
         buffers,
         out: MeshParts::default(),
@@ -475,6 +491,7 @@ fn load_gltf(bytes: &[u8], path: &Path) -> std::result::Result<MeshParts, String
         material_slot: vec![None; gltf.materials().len()],
         stack: Vec::new(),
         doc: &gltf,
+        at,
     };
     for node in scene.nodes() {
         walk.node(&node, DMat4::IDENTITY)?;
@@ -483,13 +500,14 @@ fn load_gltf(bytes: &[u8], path: &Path) -> std::result::Result<MeshParts, String
 }
 
 impl GltfWalk<'_> {
-    fn node(&mut self, node: &gltf::Node, parent: DMat4) -> std::result::Result<(), String> {
+    fn node(&mut self, node: &gltf::Node, parent: DMat4) -> Result<()> {
+        let at = self.at;
         if self.stack.contains(&node.index()) {
-            return Err(format!("node {} is its own ancestor", node.index()));
+            return Err(at.error(format!("node {} is its own ancestor", node.index())));
         }
         let world = parent * node_matrix(node);
         if !world.is_finite() {
-            return Err(format!("node {}: transform is not finite", node.index()));
+            return Err(at.error(format!("node {}: transform is not finite", node.index())));
         }
         self.stack.push(node.index());
         if let Some(mesh) = node.mesh() {
@@ -497,7 +515,7 @@ impl GltfWalk<'_> {
                 .mesh_slot
                 .get(mesh.index())
                 .copied()
-                .ok_or_else(|| format!("mesh {} does not exist", mesh.index()))?;
+                .ok_or_else(|| at.error(format!("mesh {} does not exist", mesh.index())))?;
             let proto = match slot {
                 Some(p) => p,
                 None => {
@@ -519,122 +537,45 @@ impl GltfWalk<'_> {
         Ok(())
     }
 
-    fn primitive(
-        &mut self,
-        primitive: &gltf::Primitive,
-        proto: usize,
-    ) -> std::result::Result<(), String> {
+    /// Appends a triangle primitive to prototype `proto`: its vertices, its triangles
+    /// and their material. Lines and points have no area: skipped.
+    fn primitive(&mut self, primitive: &gltf::Primitive, proto: usize) -> Result<()> {
         use gltf::accessor::{DataType, Dimensions};
-        use rayon::prelude::*;
-        // Lines and points have no area: skip them.
+        let at = self.at;
         if primitive.mode() != gltf::mesh::Mode::Triangles {
             return Ok(());
         }
         let positions = primitive
             .get(&gltf::Semantic::Positions)
-            .ok_or("a triangle primitive has no POSITION")?;
-        check_accessor(&positions, "POSITION", Dimensions::Vec3, &[DataType::F32])?;
+            .ok_or_else(|| at.error("a triangle primitive has no POSITION"))?;
+        check_accessor(
+            &positions,
+            "POSITION",
+            Dimensions::Vec3,
+            &[DataType::F32],
+            at,
+        )?;
         if let Some(indices) = primitive.indices() {
             check_accessor(
                 &indices,
                 "indices",
                 Dimensions::Scalar,
                 &[DataType::U8, DataType::U16, DataType::U32],
+                at,
             )?;
         }
         let material = self.material(primitive)?;
-        let base = self.out.prototypes[proto].0.vertices.len();
         let mesh = &mut self.out.prototypes[proto].0;
-        let buffers = &self.buffers;
-        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &**d));
-        // Read straight into the mesh: a 10⁷-triangle file is no longer held three times.
-        // Tightly packed data (the usual layout) is decoded in parallel.
-        if let Some(bytes) = packed_bytes(&positions, buffers) {
-            mesh.vertices
-                .par_extend(bytes.par_chunks_exact(12).map(|c| {
-                    DVec3::new(
-                        f32_at(c, 0).into(),
-                        f32_at(c, 4).into(),
-                        f32_at(c, 8).into(),
-                    )
-                }));
-            let added = &mesh.vertices[base..];
-            if !added
-                .par_chunks(BLOCK)
-                .all(|b| b.iter().all(|p| p.is_finite()))
-            {
-                added.iter().try_for_each(|&p| check_vertex(p).map(drop))?;
-            }
-        } else {
-            let read = reader.read_positions().ok_or_else(|| {
-                format!("accessor {}: data outside its buffer", positions.index())
-            })?;
-            mesh.vertices.reserve_exact(positions.count());
-            for p in read {
-                mesh.vertices
-                    .push(check_vertex(DVec3::from_array(p.map(f64::from)))?);
-            }
-        }
+        let base = mesh.vertices.len();
+        read_positions(&mut mesh.vertices, primitive, &positions, &self.buffers, at)?;
         let vertex_count = mesh.vertices.len() - base;
-        let out_of_range = |i: u32| format!("index {i} out of range ({vertex_count} vertices)");
-        let corner = |i: u32| {
-            if i as usize >= vertex_count {
-                return Err(out_of_range(i));
-            }
-            u32::try_from(base + i as usize).map_err(|_| "too many vertices".to_string())
-        };
         let triangles_before = mesh.triangles.len();
-        let packed_indices = primitive
-            .indices()
-            .filter(|acc| acc.data_type() == DataType::U32)
-            .and_then(|acc| packed_bytes(&acc, buffers));
-        match (primitive.indices(), packed_indices) {
-            (Some(_), Some(bytes)) => {
-                whole_triangles(bytes.len() / 4)?;
-                let index = |c: &[u8]| u32_at(c, 0);
-                let in_range = |b: &[u8]| {
-                    b.chunks_exact(4)
-                        .all(|c| (index(c) as usize) < vertex_count)
-                };
-                if !bytes.par_chunks(4 * BLOCK).all(in_range) {
-                    let bad = bytes
-                        .chunks_exact(4)
-                        .map(index)
-                        .find(|&i| i as usize >= vertex_count);
-                    return Err(out_of_range(bad.unwrap_or_default()));
-                }
-                // Every index is below vertex_count, so the last vertex bounds them all.
-                let base = u32::try_from(base + vertex_count.saturating_sub(1))
-                    .map(|_| base as u32)
-                    .map_err(|_| "too many vertices")?;
-                mesh.triangles.par_extend(
-                    bytes
-                        .par_chunks_exact(12)
-                        .map(|c| [0, 4, 8].map(|k| base + u32_at(c, k))),
-                );
-            }
-            (Some(acc), None) => {
-                let mut indices = reader
-                    .read_indices()
-                    .ok_or_else(|| format!("accessor {}: data outside its buffer", acc.index()))?
-                    .into_u32();
-                whole_triangles(indices.len())?;
-                mesh.triangles.reserve_exact(indices.len() / 3);
-                while let (Some(a), Some(b), Some(c)) =
-                    (indices.next(), indices.next(), indices.next())
-                {
-                    mesh.triangles.push([corner(a)?, corner(b)?, corner(c)?]);
-                }
-            }
-            (None, _) => {
-                whole_triangles(vertex_count)?;
-                mesh.triangles.reserve_exact(vertex_count / 3);
-                for k in (0..vertex_count as u32).step_by(3) {
-                    mesh.triangles
-                        .push([corner(k)?, corner(k + 1)?, corner(k + 2)?]);
-                }
-            }
-        }
+        let corners = Corners {
+            base,
+            vertex_count,
+            at,
+        };
+        read_triangles(&mut mesh.triangles, primitive, &corners, &self.buffers)?;
         let added = mesh.triangles.len() - triangles_before;
         let materials = &mut self.out.prototypes[proto].1;
         materials.resize(materials.len() + added, material);
@@ -642,10 +583,8 @@ impl GltfWalk<'_> {
     }
 
     /// The primitive's material as a slot in `out.materials`, created on first use.
-    fn material(
-        &mut self,
-        primitive: &gltf::Primitive,
-    ) -> std::result::Result<Option<u32>, String> {
+    fn material(&mut self, primitive: &gltf::Primitive) -> Result<Option<u32>> {
+        let at = self.at;
         let Some(index) = primitive.material().index() else {
             self.out.missing_reason = Some("a primitive has no material".to_string());
             return Ok(None);
@@ -653,7 +592,7 @@ impl GltfWalk<'_> {
         let slot = self
             .material_slot
             .get_mut(index)
-            .ok_or_else(|| format!("material {index} does not exist"))?;
+            .ok_or_else(|| at.error(format!("material {index} does not exist")))?;
         if let Some(s) = slot {
             return Ok(Some(*s));
         }
@@ -661,7 +600,7 @@ impl GltfWalk<'_> {
             .doc
             .materials()
             .nth(index)
-            .ok_or_else(|| format!("material {index} does not exist"))?;
+            .ok_or_else(|| at.error(format!("material {index} does not exist")))?;
         let pbr = m.pbr_metallic_roughness();
         let [r, g, b, _alpha] = pbr.base_color_factor();
         let (reflectance, glossy_reflectance, roughness) = gltf_to_material(
@@ -679,4 +618,147 @@ impl GltfWalk<'_> {
         *slot = Some(s);
         Ok(Some(s))
     }
+}
+
+/// Appends a primitive's POSITION accessor to `vertices`, each checked finite. Read
+/// straight into the mesh, so a 10⁷-triangle file is not held three times; tightly
+/// packed data (the usual layout) is decoded in parallel.
+fn read_positions(
+    vertices: &mut Vec<DVec3>,
+    primitive: &gltf::Primitive,
+    positions: &gltf::Accessor,
+    buffers: &[Cow<[u8]>],
+    at: &Culprit,
+) -> Result<()> {
+    use rayon::prelude::*;
+    let base = vertices.len();
+    if let Some(bytes) = packed_bytes(positions, buffers) {
+        vertices.par_extend(bytes.par_chunks_exact(12).map(|c| {
+            DVec3::new(
+                f32_at(c, 0).into(),
+                f32_at(c, 4).into(),
+                f32_at(c, 8).into(),
+            )
+        }));
+        let added = &vertices[base..];
+        if !added
+            .par_chunks(BLOCK)
+            .all(|b| b.iter().all(|p| p.is_finite()))
+        {
+            added
+                .iter()
+                .try_for_each(|&p| check_vertex(p, at).map(drop))?;
+        }
+    } else {
+        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &**d));
+        let read = reader.read_positions().ok_or_else(|| {
+            at.error(format!(
+                "accessor {}: data outside its buffer",
+                positions.index()
+            ))
+        })?;
+        vertices.reserve_exact(positions.count());
+        for p in read {
+            vertices.push(check_vertex(DVec3::from_array(p.map(f64::from)), at)?);
+        }
+    }
+    Ok(())
+}
+
+/// A primitive's vertices in its prototype: `vertex_count` of them from `base` on.
+struct Corners<'a> {
+    base: usize,
+    vertex_count: usize,
+    at: &'a Culprit<'a>,
+}
+
+impl Corners<'_> {
+    fn out_of_range(&self, i: u32) -> Error {
+        self.at.error(format!(
+            "index {i} out of range ({} vertices)",
+            self.vertex_count
+        ))
+    }
+
+    /// The prototype's vertex for the primitive's index `i`.
+    fn corner(&self, i: u32) -> Result<u32> {
+        if i as usize >= self.vertex_count {
+            return Err(self.out_of_range(i));
+        }
+        u32::try_from(self.base + i as usize).map_err(|_| self.at.error("too many vertices"))
+    }
+}
+
+/// Appends a primitive's triangles to `triangles`: from its index accessor, or from
+/// consecutive vertices when it has none.
+fn read_triangles(
+    triangles: &mut Vec<[u32; 3]>,
+    primitive: &gltf::Primitive,
+    corners: &Corners,
+    buffers: &[Cow<[u8]>],
+) -> Result<()> {
+    let at = corners.at;
+    let packed_indices = primitive
+        .indices()
+        .filter(|acc| acc.data_type() == gltf::accessor::DataType::U32)
+        .and_then(|acc| packed_bytes(&acc, buffers));
+    match (primitive.indices(), packed_indices) {
+        (Some(_), Some(bytes)) => packed_triangles(triangles, bytes, corners)?,
+        (Some(acc), None) => {
+            let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &**d));
+            let mut indices = reader
+                .read_indices()
+                .ok_or_else(|| {
+                    at.error(format!("accessor {}: data outside its buffer", acc.index()))
+                })?
+                .into_u32();
+            whole_triangles(indices.len(), at)?;
+            triangles.reserve_exact(indices.len() / 3);
+            while let (Some(a), Some(b), Some(c)) = (indices.next(), indices.next(), indices.next())
+            {
+                triangles.push([corners.corner(a)?, corners.corner(b)?, corners.corner(c)?]);
+            }
+        }
+        (None, _) => {
+            whole_triangles(corners.vertex_count, at)?;
+            triangles.reserve_exact(corners.vertex_count / 3);
+            for k in (0..corners.vertex_count as u32).step_by(3) {
+                triangles.push([
+                    corners.corner(k)?,
+                    corners.corner(k + 1)?,
+                    corners.corner(k + 2)?,
+                ]);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Appends the triangles of tightly packed u32 indices, checked and offset in parallel.
+fn packed_triangles(triangles: &mut Vec<[u32; 3]>, bytes: &[u8], corners: &Corners) -> Result<()> {
+    use rayon::prelude::*;
+    let (vertex_count, at) = (corners.vertex_count, corners.at);
+    whole_triangles(bytes.len() / 4, at)?;
+    let index = |c: &[u8]| u32_at(c, 0);
+    let in_range = |b: &[u8]| {
+        b.chunks_exact(4)
+            .all(|c| (index(c) as usize) < vertex_count)
+    };
+    if !bytes.par_chunks(4 * BLOCK).all(in_range) {
+        let bad = bytes
+            .chunks_exact(4)
+            .map(index)
+            .find(|&i| i as usize >= vertex_count);
+        return Err(corners.out_of_range(bad.unwrap_or_default()));
+    }
+    // Every index is below vertex_count, so the last vertex bounds them all.
+    let base = u32::try_from(corners.base + vertex_count.saturating_sub(1))
+        .map(|_| corners.base as u32)
+        .map_err(|_| at.error("too many vertices"))?;
+    triangles.par_extend(
+        bytes
+            .par_chunks_exact(12)
+            .map(|c| [0, 4, 8].map(|k| base + u32_at(c, k))),
+    );
+    Ok(())
 }
