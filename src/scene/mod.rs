@@ -15,6 +15,7 @@ mod instance;
 mod load;
 mod material;
 pub mod mesh_io;
+mod objects;
 pub mod shapes;
 mod triangle_ids;
 
