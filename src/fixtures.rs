@@ -31,20 +31,7 @@ pub fn procedural_mesh(min_triangles: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     // Spheres (UV, 48 × 24: 2 208 triangles each) until the budget is reached.
     let (seg, rings) = (48usize, 24usize);
     let sphere_vertices = (rings + 1) * seg;
-    let at = |k: usize, s: usize| (k * seg + s % seg) as u32;
-    let mut pattern: Vec<[u32; 3]> = Vec::new();
-    for k in 0..rings {
-        for s in 0..seg {
-            // Quads between two rings; fans at the poles.
-            // Skip the halves that collapse onto a pole.
-            if k + 1 != rings {
-                pattern.push([at(k, s), at(k + 1, s), at(k + 1, s + 1)]);
-            }
-            if k != 0 {
-                pattern.push([at(k, s), at(k + 1, s + 1), at(k, s + 1)]);
-            }
-        }
-    }
+    let pattern = sphere_pattern(seg, rings);
     let spheres = min_triangles
         .saturating_sub(field_triangles)
         .div_ceil(pattern.len());
@@ -72,23 +59,7 @@ pub fn procedural_mesh(min_triangles: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
             )
         })
         .unzip();
-    let unit_sphere: Vec<(DVec3, f64)> = (0..sphere_vertices)
-        .map(|index| {
-            let (k, s) = (index / seg, index % seg);
-            let theta = std::f64::consts::PI * k as f64 / rings as f64;
-            let phi = std::f64::consts::TAU * s as f64 / seg as f64;
-            let d = DVec3::new(
-                libm::sin(theta) * libm::cos(phi),
-                libm::sin(theta) * libm::sin(phi),
-                libm::cos(theta),
-            );
-            // A little displacement so no two spheres are alike.
-            (
-                d,
-                1.0 + 0.05 * libm::sin(5.0 * phi) * libm::sin(3.0 * theta),
-            )
-        })
-        .collect();
+    let unit_sphere = unit_sphere(seg, rings);
 
     let mut verts: Vec<DVec3> = Vec::new();
     (0..field_vertices + spheres * sphere_vertices)
@@ -126,6 +97,47 @@ pub fn procedural_mesh(min_triangles: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
         })
         .collect_into_vec(&mut tris);
     (verts, tris)
+}
+
+/// The triangles of a UV sphere of `seg` segments and `rings` rings, over vertex
+/// `k * seg + s` (ring k, segment s): quads between two rings, fans at the poles.
+fn sphere_pattern(seg: usize, rings: usize) -> Vec<[u32; 3]> {
+    let at = |k: usize, s: usize| (k * seg + s % seg) as u32;
+    let mut pattern: Vec<[u32; 3]> = Vec::new();
+    for k in 0..rings {
+        for s in 0..seg {
+            // Skip the halves that collapse onto a pole.
+            if k + 1 != rings {
+                pattern.push([at(k, s), at(k + 1, s), at(k + 1, s + 1)]);
+            }
+            if k != 0 {
+                pattern.push([at(k, s), at(k + 1, s + 1), at(k, s + 1)]);
+            }
+        }
+    }
+    pattern
+}
+
+/// Per vertex of [`sphere_pattern`]: its direction from the centre and its radius
+/// factor.
+fn unit_sphere(seg: usize, rings: usize) -> Vec<(DVec3, f64)> {
+    (0..(rings + 1) * seg)
+        .map(|index| {
+            let (k, s) = (index / seg, index % seg);
+            let theta = std::f64::consts::PI * k as f64 / rings as f64;
+            let phi = std::f64::consts::TAU * s as f64 / seg as f64;
+            let d = DVec3::new(
+                libm::sin(theta) * libm::cos(phi),
+                libm::sin(theta) * libm::sin(phi),
+                libm::cos(theta),
+            );
+            // A little displacement so no two spheres are alike.
+            (
+                d,
+                1.0 + 0.05 * libm::sin(5.0 * phi) * libm::sin(3.0 * theta),
+            )
+        })
+        .collect()
 }
 
 /// Loads a mesh file (OBJ or glTF) through the scene loader as one `Geometry`,

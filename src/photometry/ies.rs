@@ -224,31 +224,8 @@ impl Records {
                 format!("{nv} × {nh} candela values: more than {MAX_VALUES}"),
             ));
         }
-        let (kind, kind_line) = t.number("the photometric type")?;
-        let kind = match kind {
-            1.0 => PhotometricType::C,
-            2.0 => PhotometricType::B,
-            3.0 => PhotometricType::A,
-            _ => {
-                return Err(at(
-                    origin,
-                    kind_line,
-                    format!("unknown photometric type {kind} (1 = C, 2 = B, 3 = A)"),
-                ))
-            }
-        };
-        let (units, units_line) = t.number("the units type")?;
-        let unit_m = match units {
-            1.0 => FOOT_M,
-            2.0 => 1.0,
-            _ => {
-                return Err(at(
-                    origin,
-                    units_line,
-                    format!("unknown units type {units} (1 = feet, 2 = metres)"),
-                ))
-            }
-        };
+        let kind = Self::photometric_type(t)?;
+        let unit_m = Self::unit_m(t)?;
         let mut dimension = |what: &str| -> Result<f64> {
             let (v, line) = t.number(what)?;
             if (v * unit_m).abs() > MAX_COORDINATE_M {
@@ -264,7 +241,57 @@ impl Records {
         let width = dimension("the luminous width")?;
         let length = dimension("the luminous length")?;
         let height = dimension("the luminous height")?;
+        let (ballast, lamp_factor, watts) = Self::record_2(t, year)?;
+        Ok(Records {
+            lamps,
+            lumens,
+            multiplier,
+            vertical_angles: nv,
+            horizontal_angles: nh,
+            kind,
+            unit_m,
+            width,
+            length,
+            height,
+            ballast,
+            lamp_factor,
+            watts,
+        })
+    }
 
+    /// Record 1's photometric type: 1 = C, 2 = B, 3 = A.
+    fn photometric_type(t: &mut Tokens) -> Result<PhotometricType> {
+        let (kind, kind_line) = t.number("the photometric type")?;
+        match kind {
+            1.0 => Ok(PhotometricType::C),
+            2.0 => Ok(PhotometricType::B),
+            3.0 => Ok(PhotometricType::A),
+            _ => Err(at(
+                t.origin(),
+                kind_line,
+                format!("unknown photometric type {kind} (1 = C, 2 = B, 3 = A)"),
+            )),
+        }
+    }
+
+    /// Record 1's units type as metres per unit: 1 = feet, 2 = metres.
+    fn unit_m(t: &mut Tokens) -> Result<f64> {
+        let (units, units_line) = t.number("the units type")?;
+        match units {
+            1.0 => Ok(FOOT_M),
+            2.0 => Ok(1.0),
+            _ => Err(at(
+                t.origin(),
+                units_line,
+                format!("unknown units type {units} (1 = feet, 2 = metres)"),
+            )),
+        }
+    }
+
+    /// Record 2: the ballast factor, the ballast-lamp photometric factor and the input
+    /// watts.
+    fn record_2(t: &mut Tokens, year: Option<u16>) -> Result<(f64, f64, f64)> {
+        let origin = t.origin();
         let (ballast, ballast_line) = t.number("the ballast factor")?;
         positive(origin, ballast_line, "ballast factor", ballast)?;
         let (third, third_line) = t.number(if year == Some(2019) {
@@ -287,21 +314,7 @@ impl Records {
                 format!("input watts {watts} is negative"),
             ));
         }
-        Ok(Records {
-            lamps,
-            lumens,
-            multiplier,
-            vertical_angles: nv,
-            horizontal_angles: nh,
-            kind,
-            unit_m,
-            width,
-            length,
-            height,
-            ballast,
-            lamp_factor,
-            watts,
-        })
+        Ok((ballast, lamp_factor, watts))
     }
 }
 

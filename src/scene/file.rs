@@ -182,7 +182,7 @@ impl ObjectFile {
     }
 
     /// Copies it makes: each `instances` entry (one without) at each `grid` point
-    /// (saturating: the loader refuses past `load::MAX_INSTANCES`).
+    /// (saturating: the loader refuses past `objects::MAX_INSTANCES`).
     pub fn copy_count(&self) -> u64 {
         let listed = self.instances.as_ref().map_or(1, |l| l.len() as u64);
         let [nx, ny] = self.grid.map_or([1, 1], |g| g.count);

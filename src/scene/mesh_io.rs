@@ -2,12 +2,14 @@
 //! `gltf` without its `import` feature (we resolve buffers ourselves and never decode
 //! images). Both return the file's meshes in their own frames with their placements,
 //! and the file's own materials, already reduced to scalar diffuse and glossy
-//! reflectances and a roughness (docs/scene.md).
+//! reflectances and a roughness (docs/scene.md). The glTF reader is `gltf_file`.
+
+mod gltf_file;
 
 use super::shapes::Mesh;
 use crate::error::{Error, Result};
-use glam::{DMat4, DQuat, DVec3};
-use std::borrow::Cow;
+use crate::input::one_line;
+use glam::{DMat4, DVec3};
 use std::path::Path;
 
 /// RGB → scalar reflectance: luminance-weighted (Rec. 709 / sRGB Y), because luxtally
@@ -100,12 +102,13 @@ pub fn load_mesh_parts(path: &Path, origin: &str) -> Result<MeshParts> {
             format!("cannot read mesh file {}: {e}", path.display()),
         )
     })?;
-    let shown = path.display().to_string();
-    let fail =
-        |msg: String| Error::input(origin, format!("{shown}: {}", super::file::one_line(&msg)));
+    let at = Culprit {
+        origin,
+        file: path.display().to_string(),
+    };
     let out = match ext.as_str() {
         "obj" => {
-            let file = load_obj(&bytes, path).map_err(fail)?;
+            let file = load_obj(&bytes, path, &at)?;
             MeshParts {
                 prototypes: vec![(file.mesh, file.material)],
                 placements: vec![(0, DMat4::IDENTITY)],
@@ -113,77 +116,37 @@ pub fn load_mesh_parts(path: &Path, origin: &str) -> Result<MeshParts> {
                 missing_reason: file.missing_reason,
             }
         }
-        "gltf" | "glb" => load_gltf(&bytes, path).map_err(fail)?,
-        _ => {
-            return Err(Error::input(
-                origin,
-                format!("{shown}: unsupported mesh format (expected .obj, .gltf or .glb)"),
-            ))
-        }
+        "gltf" | "glb" => gltf_file::load_gltf(&bytes, path, &at)?,
+        _ => return Err(at.error("unsupported mesh format (expected .obj, .gltf or .glb)")),
     };
     Ok(out)
 }
 
-fn check_vertex(p: DVec3) -> std::result::Result<DVec3, String> {
+/// The mesh file an error is about: the scene key that names it (`objects[2].file`) and
+/// its path, so every message from the readers below is one line naming both.
+struct Culprit<'a> {
+    origin: &'a str,
+    file: String,
+}
+
+impl Culprit<'_> {
+    fn error(&self, message: impl std::fmt::Display) -> Error {
+        Error::input(
+            self.origin,
+            format!("{}: {}", self.file, one_line(&message.to_string())),
+        )
+    }
+}
+
+fn check_vertex(p: DVec3, at: &Culprit) -> Result<DVec3> {
     if p.is_finite() {
         Ok(p)
     } else {
-        Err(format!("vertex {p} is not finite"))
+        Err(at.error(format!("vertex {p} is not finite")))
     }
 }
 
-/// The bytes of a tightly packed accessor (no stride, or a stride of one element) when
-/// they lie within their buffer; `None` sends the caller to `gltf`'s reader, which
-/// handles every layout and reports data outside the buffer.
-fn packed_bytes<'b>(accessor: &gltf::Accessor, buffers: &'b [Cow<[u8]>]) -> Option<&'b [u8]> {
-    // A sparse accessor's values are substituted by the reader (refused earlier anyway).
-    if accessor.sparse().is_some() {
-        return None;
-    }
-    let view = accessor.view()?;
-    if view
-        .stride()
-        .is_some_and(|stride| stride != accessor.size())
-    {
-        return None;
-    }
-    let len = accessor.count().checked_mul(accessor.size())?;
-    if accessor.offset().checked_add(len)? > view.length() {
-        return None;
-    }
-    let start = view.offset().checked_add(accessor.offset())?;
-    buffers
-        .get(view.buffer().index())?
-        .get(start..start.checked_add(len)?)
-}
-
-/// Items per parallel check of a mesh file's data (a check per item in parallel, as
-/// `find_first` does, took longer than reading the file).
-const BLOCK: usize = 1 << 16;
-
-/// The little-endian u32 at byte `k` of `c`.
-#[inline]
-fn u32_at(c: &[u8], k: usize) -> u32 {
-    u32::from_le_bytes([c[k], c[k + 1], c[k + 2], c[k + 3]])
-}
-
-/// The little-endian f32 at byte `k` of `c`.
-#[inline]
-fn f32_at(c: &[u8], k: usize) -> f32 {
-    f32::from_bits(u32_at(c, k))
-}
-
-fn whole_triangles(indices: usize) -> std::result::Result<(), String> {
-    if indices.is_multiple_of(3) {
-        Ok(())
-    } else {
-        Err(format!(
-            "{indices} indices is not a whole number of triangles"
-        ))
-    }
-}
-
-fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> {
+fn load_obj(bytes: &[u8], path: &Path, at: &Culprit) -> Result<MeshFile> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -195,7 +158,7 @@ fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> 
     let mut reader = std::io::Cursor::new(bytes);
     let (models, materials) =
         tobj::load_obj_buf(&mut reader, &options, |mtl| tobj::load_mtl(dir.join(mtl)))
-            .map_err(|e| format!("malformed OBJ: {e}"))?;
+            .map_err(|e| at.error(format!("malformed OBJ: {e}")))?;
 
     let mut out = MeshFile::default();
     // MTL problems only matter when no `material` override is given, so keep the reason.
@@ -210,7 +173,7 @@ fn load_obj(bytes: &[u8], path: &Path) -> std::result::Result<MeshFile, String> 
         }
     };
     for model in &models {
-        add_obj_model(&mut out, model, mtl_ok)?;
+        add_obj_model(&mut out, model, mtl_ok, at)?;
     }
     Ok(out)
 }
@@ -252,19 +215,20 @@ fn add_obj_model(
     out: &mut MeshFile,
     model: &tobj::Model,
     mtl_ok: bool,
-) -> std::result::Result<(), String> {
+    at: &Culprit,
+) -> Result<()> {
     let m = &model.mesh;
     if !m.positions.len().is_multiple_of(3) || !m.indices.len().is_multiple_of(3) {
-        return Err(format!(
+        return Err(at.error(format!(
             "malformed OBJ: model `{}` is incomplete",
             model.name
-        ));
+        )));
     }
     let base = out.mesh.vertices.len();
     let count = m.positions.len() / 3;
     for p in m.positions.chunks_exact(3) {
         let v = DVec3::new(p[0].into(), p[1].into(), p[2].into());
-        out.mesh.vertices.push(check_vertex(v)?);
+        out.mesh.vertices.push(check_vertex(v, at)?);
     }
     let material = match m.material_id {
         Some(id) if mtl_ok => match out.materials.get(id) {
@@ -288,395 +252,16 @@ fn add_obj_model(
         let mut tri = [0u32; 3];
         for (slot, &i) in tri.iter_mut().zip(t) {
             if i as usize >= count {
-                return Err(format!(
+                return Err(at.error(format!(
                     "malformed OBJ: face index {} out of range in `{}`",
                     i + 1,
                     model.name
-                ));
+                )));
             }
-            *slot =
-                u32::try_from(base + i as usize).map_err(|_| "too many vertices".to_string())?;
+            *slot = u32::try_from(base + i as usize).map_err(|_| at.error("too many vertices"))?;
         }
         out.mesh.triangles.push(tri);
         out.material.push(material);
     }
     Ok(())
-}
-
-/// Reads a glTF buffer's bytes: the GLB chunk, a base64 `data:` URI, or a file next to
-/// the glTF file.
-fn buffer_data<'a>(
-    buffer: &gltf::Buffer,
-    blob: Option<&'a [u8]>,
-    dir: &Path,
-) -> std::result::Result<Cow<'a, [u8]>, String> {
-    let data: Cow<[u8]> = match buffer.source() {
-        gltf::buffer::Source::Bin => blob
-            .ok_or_else(|| format!("buffer {} refers to a missing GLB chunk", buffer.index()))?
-            .into(),
-        gltf::buffer::Source::Uri(uri) if uri.starts_with("data:") => {
-            use base64::Engine;
-            let (_, payload) = uri.split_once(";base64,").ok_or_else(|| {
-                format!(
-                    "buffer {}: only base64 data URIs are supported",
-                    buffer.index()
-                )
-            })?;
-            base64::engine::general_purpose::STANDARD
-                .decode(payload)
-                .map_err(|e| format!("buffer {}: bad base64 ({e})", buffer.index()))?
-                .into()
-        }
-        gltf::buffer::Source::Uri(uri) => {
-            let file = dir.join(uri);
-            std::fs::read(&file)
-                .map_err(|e| format!("buffer {}: {}: {e}", buffer.index(), file.display()))?
-                .into()
-        }
-    };
-    if data.len() < buffer.length() {
-        return Err(format!(
-            "buffer {} holds {} bytes, fewer than its byteLength {}",
-            buffer.index(),
-            data.len(),
-            buffer.length()
-        ));
-    }
-    Ok(data)
-}
-
-/// Checks what `gltf`'s reader assumes (and would otherwise debug-assert or overflow on):
-/// the accessor's shape, a non-empty dense view, and a count its view can hold.
-fn check_accessor(
-    accessor: &gltf::Accessor,
-    what: &str,
-    dims: gltf::accessor::Dimensions,
-    types: &[gltf::accessor::DataType],
-) -> std::result::Result<(), String> {
-    let id = accessor.index();
-    if accessor.dimensions() != dims || !types.contains(&accessor.data_type()) {
-        return Err(format!(
-            "accessor {id} ({what}) has type {:?} {:?}",
-            accessor.dimensions(),
-            accessor.data_type()
-        ));
-    }
-    if accessor.sparse().is_some() {
-        return Err(format!(
-            "accessor {id} ({what}): sparse accessors are not supported"
-        ));
-    }
-    let view = accessor
-        .view()
-        .ok_or_else(|| format!("accessor {id} ({what}) has no buffer view"))?;
-    if let Some(stride) = view.stride() {
-        if stride < accessor.size() {
-            return Err(format!("accessor {id} ({what}): stride {stride} too small"));
-        }
-    }
-    if accessor.count() == 0 || accessor.count() > view.length() {
-        return Err(format!(
-            "accessor {id} ({what}): bad count {}",
-            accessor.count()
-        ));
-    }
-    Ok(())
-}
-
-/// A node's local transform in f64 (TRS composed as T·R·S, as glTF specifies).
-fn node_matrix(node: &gltf::Node) -> DMat4 {
-    match node.transform() {
-        gltf::scene::Transform::Matrix { matrix } => {
-            DMat4::from_cols_array_2d(&matrix.map(|c| c.map(f64::from)))
-        }
-        gltf::scene::Transform::Decomposed {
-            translation,
-            rotation,
-            scale,
-        } => {
-            let q = DQuat::from_array(rotation.map(f64::from));
-            // Unnormalised quaternions occur in the wild; a zero one means no rotation.
-            let q = if q.length_squared() > 0.0 {
-                q.normalize()
-            } else {
-                DQuat::IDENTITY
-            };
-            DMat4::from_scale_rotation_translation(
-                DVec3::from_array(scale.map(f64::from)),
-                q,
-                DVec3::from_array(translation.map(f64::from)),
-            )
-        }
-    }
-}
-
-struct GltfWalk<'a> {
-    buffers: Vec<Cow<'a, [u8]>>,
-    out: MeshParts,
-    /// glTF mesh index → prototype, decoded on first use.
-    mesh_slot: Vec<Option<u32>>,
-    /// glTF material index → index in `out.materials`.
-    material_slot: Vec<Option<u32>>,
-    /// Nodes on the current path from the root, to reject cycles.
-    stack: Vec<usize>,
-    doc: &'a gltf::Document,
-}
-
-/// The JSON and the binary chunk of a glTF file, borrowed: a GLB's two chunks, or the
-/// whole file as JSON. (`gltf::Gltf::from_slice` would copy a GLB's binary chunk.)
-type GltfChunks<'a> = (Cow<'a, [u8]>, Option<Cow<'a, [u8]>>);
-
-fn gltf_chunks(bytes: &[u8]) -> std::result::Result<GltfChunks<'_>, String> {
-    if bytes.starts_with(b"glTF") {
-        let glb = gltf::Glb::from_slice(bytes).map_err(|e| format!("malformed glTF: {e}"))?;
-        Ok((glb.json, glb.bin))
-    } else {
-        Ok((bytes.into(), None))
-    }
-}
-
-/// gltf-json 1.4.1's validation indexes `accessors[POSITION]` before checking that the
-/// index exists, and panics on a bad one: check that first on the unvalidated JSON.
-fn precheck_gltf(json: &[u8]) -> std::result::Result<gltf::json::Root, String> {
-    let root: gltf::json::Root =
-        gltf::json::deserialize::from_slice(json).map_err(|e| format!("malformed glTF: {e}"))?;
-    for (m, mesh) in root.meshes.iter().enumerate() {
-        for (p, primitive) in mesh.primitives.iter().enumerate() {
-            for accessor in primitive.attributes.values() {
-                if accessor.value() >= root.accessors.len() {
-                    return Err(format!(
-                        "malformed glTF: meshes[{m}].primitives[{p}] refers to missing accessor {}",
-                        accessor.value()
-                    ));
-                }
-            }
-        }
-    }
-    Ok(root)
-}
-
-fn load_gltf(bytes: &[u8], path: &Path) -> std::result::Result<MeshParts, String> {
-    let (json, blob) = gltf_chunks(bytes)?;
-    let gltf = gltf::Document::from_json(precheck_gltf(&json)?)
-        .map_err(|e| format!("malformed glTF: {e}"))?;
-    let dir = path.parent().unwrap_or(Path::new(""));
-    let buffers = gltf
-        .buffers()
-        .map(|b| buffer_data(&b, blob.as_deref(), dir))
-        .collect::<std::result::Result<Vec<_>, _>>()?;
-    let scene = gltf
-        .default_scene()
-        .or_else(|| gltf.scenes().next())
-        .ok_or("the glTF file has no scene")?;
-    let mut walk = GltfWalk {
-        buffers,
-        out: MeshParts::default(),
-        mesh_slot: vec![None; gltf.meshes().len()],
-        material_slot: vec![None; gltf.materials().len()],
-        stack: Vec::new(),
-        doc: &gltf,
-    };
-    for node in scene.nodes() {
-        walk.node(&node, DMat4::IDENTITY)?;
-    }
-    Ok(walk.out)
-}
-
-impl GltfWalk<'_> {
-    fn node(&mut self, node: &gltf::Node, parent: DMat4) -> std::result::Result<(), String> {
-        if self.stack.contains(&node.index()) {
-            return Err(format!("node {} is its own ancestor", node.index()));
-        }
-        let world = parent * node_matrix(node);
-        if !world.is_finite() {
-            return Err(format!("node {}: transform is not finite", node.index()));
-        }
-        self.stack.push(node.index());
-        if let Some(mesh) = node.mesh() {
-            let slot = self
-                .mesh_slot
-                .get(mesh.index())
-                .copied()
-                .ok_or_else(|| format!("mesh {} does not exist", mesh.index()))?;
-            let proto = match slot {
-                Some(p) => p,
-                None => {
-                    let p = self.out.prototypes.len() as u32;
-                    self.out.prototypes.push((Mesh::default(), Vec::new()));
-                    for primitive in mesh.primitives() {
-                        self.primitive(&primitive, p as usize)?;
-                    }
-                    self.mesh_slot[mesh.index()] = Some(p);
-                    p
-                }
-            };
-            self.out.placements.push((proto, world));
-        }
-        for child in node.children() {
-            self.node(&child, world)?;
-        }
-        self.stack.pop();
-        Ok(())
-    }
-
-    fn primitive(
-        &mut self,
-        primitive: &gltf::Primitive,
-        proto: usize,
-    ) -> std::result::Result<(), String> {
-        use gltf::accessor::{DataType, Dimensions};
-        use rayon::prelude::*;
-        // Lines and points have no area: skip them.
-        if primitive.mode() != gltf::mesh::Mode::Triangles {
-            return Ok(());
-        }
-        let positions = primitive
-            .get(&gltf::Semantic::Positions)
-            .ok_or("a triangle primitive has no POSITION")?;
-        check_accessor(&positions, "POSITION", Dimensions::Vec3, &[DataType::F32])?;
-        if let Some(indices) = primitive.indices() {
-            check_accessor(
-                &indices,
-                "indices",
-                Dimensions::Scalar,
-                &[DataType::U8, DataType::U16, DataType::U32],
-            )?;
-        }
-        let material = self.material(primitive)?;
-        let base = self.out.prototypes[proto].0.vertices.len();
-        let mesh = &mut self.out.prototypes[proto].0;
-        let buffers = &self.buffers;
-        let reader = primitive.reader(|b| buffers.get(b.index()).map(|d| &**d));
-        // Read straight into the mesh: a 10⁷-triangle file is no longer held three times.
-        // Tightly packed data (the usual layout) is decoded in parallel.
-        if let Some(bytes) = packed_bytes(&positions, buffers) {
-            mesh.vertices
-                .par_extend(bytes.par_chunks_exact(12).map(|c| {
-                    DVec3::new(
-                        f32_at(c, 0).into(),
-                        f32_at(c, 4).into(),
-                        f32_at(c, 8).into(),
-                    )
-                }));
-            let added = &mesh.vertices[base..];
-            if !added
-                .par_chunks(BLOCK)
-                .all(|b| b.iter().all(|p| p.is_finite()))
-            {
-                added.iter().try_for_each(|&p| check_vertex(p).map(drop))?;
-            }
-        } else {
-            let read = reader.read_positions().ok_or_else(|| {
-                format!("accessor {}: data outside its buffer", positions.index())
-            })?;
-            mesh.vertices.reserve_exact(positions.count());
-            for p in read {
-                mesh.vertices
-                    .push(check_vertex(DVec3::from_array(p.map(f64::from)))?);
-            }
-        }
-        let vertex_count = mesh.vertices.len() - base;
-        let out_of_range = |i: u32| format!("index {i} out of range ({vertex_count} vertices)");
-        let corner = |i: u32| {
-            if i as usize >= vertex_count {
-                return Err(out_of_range(i));
-            }
-            u32::try_from(base + i as usize).map_err(|_| "too many vertices".to_string())
-        };
-        let triangles_before = mesh.triangles.len();
-        let packed_indices = primitive
-            .indices()
-            .filter(|acc| acc.data_type() == DataType::U32)
-            .and_then(|acc| packed_bytes(&acc, buffers));
-        match (primitive.indices(), packed_indices) {
-            (Some(_), Some(bytes)) => {
-                whole_triangles(bytes.len() / 4)?;
-                let index = |c: &[u8]| u32_at(c, 0);
-                let in_range = |b: &[u8]| {
-                    b.chunks_exact(4)
-                        .all(|c| (index(c) as usize) < vertex_count)
-                };
-                if !bytes.par_chunks(4 * BLOCK).all(in_range) {
-                    let bad = bytes
-                        .chunks_exact(4)
-                        .map(index)
-                        .find(|&i| i as usize >= vertex_count);
-                    return Err(out_of_range(bad.unwrap_or_default()));
-                }
-                // Every index is below vertex_count, so the last vertex bounds them all.
-                let base = u32::try_from(base + vertex_count.saturating_sub(1))
-                    .map(|_| base as u32)
-                    .map_err(|_| "too many vertices")?;
-                mesh.triangles.par_extend(
-                    bytes
-                        .par_chunks_exact(12)
-                        .map(|c| [0, 4, 8].map(|k| base + u32_at(c, k))),
-                );
-            }
-            (Some(acc), None) => {
-                let mut indices = reader
-                    .read_indices()
-                    .ok_or_else(|| format!("accessor {}: data outside its buffer", acc.index()))?
-                    .into_u32();
-                whole_triangles(indices.len())?;
-                mesh.triangles.reserve_exact(indices.len() / 3);
-                while let (Some(a), Some(b), Some(c)) =
-                    (indices.next(), indices.next(), indices.next())
-                {
-                    mesh.triangles.push([corner(a)?, corner(b)?, corner(c)?]);
-                }
-            }
-            (None, _) => {
-                whole_triangles(vertex_count)?;
-                mesh.triangles.reserve_exact(vertex_count / 3);
-                for k in (0..vertex_count as u32).step_by(3) {
-                    mesh.triangles
-                        .push([corner(k)?, corner(k + 1)?, corner(k + 2)?]);
-                }
-            }
-        }
-        let added = mesh.triangles.len() - triangles_before;
-        let materials = &mut self.out.prototypes[proto].1;
-        materials.resize(materials.len() + added, material);
-        Ok(())
-    }
-
-    /// The primitive's material as a slot in `out.materials`, created on first use.
-    fn material(
-        &mut self,
-        primitive: &gltf::Primitive,
-    ) -> std::result::Result<Option<u32>, String> {
-        let Some(index) = primitive.material().index() else {
-            self.out.missing_reason = Some("a primitive has no material".to_string());
-            return Ok(None);
-        };
-        let slot = self
-            .material_slot
-            .get_mut(index)
-            .ok_or_else(|| format!("material {index} does not exist"))?;
-        if let Some(s) = slot {
-            return Ok(Some(*s));
-        }
-        let m = self
-            .doc
-            .materials()
-            .nth(index)
-            .ok_or_else(|| format!("material {index} does not exist"))?;
-        let pbr = m.pbr_metallic_roughness();
-        let [r, g, b, _alpha] = pbr.base_color_factor();
-        let (reflectance, glossy_reflectance, roughness) = gltf_to_material(
-            [r, g, b].map(f64::from),
-            pbr.metallic_factor().into(),
-            pbr.roughness_factor().into(),
-        );
-        self.out.materials.push(FileMaterial {
-            name: m.name().map_or_else(|| index.to_string(), str::to_string),
-            reflectance,
-            glossy_reflectance,
-            roughness,
-        });
-        let s = (self.out.materials.len() - 1) as u32;
-        *slot = Some(s);
-        Ok(Some(s))
-    }
 }
