@@ -2,9 +2,9 @@
 //! virtual receivers, and reports, forecasts and controls its own statistical error.
 //!
 //! Data path: `scene` (load and validate; `light` holds each light kind — its entry,
-//! validation and emission — and `photometry` reads luminaires' files for it)
-//! → `surface` (BSDFs: the `Lobe`/`Bsdf` interface, one file per lobe, microfacet and
-//! Fresnel maths) → `accel` (ray casting backends) → `tally` (receivers and triangle
+//! validation and emission — and `photometry` reads luminaires' files for it;
+//! `surface` the materials and their BSDFs: the `Lobe`/`Bsdf` interface, one file per
+//! lobe, microfacet and Fresnel maths) → `accel` (ray casting backends) → `tally` (receivers and triangle
 //! maps: where and what scores) → `trace` (emission, photon batches, direct light)
 //! → `stats`
 //! (equations of method.md, forecast, stop criteria) → `run` (validate, set up, epochs;
@@ -19,7 +19,7 @@
 //! it (no import cycles): `error`, `rng`, `sampling`, `raster` (bitmap font, PNG
 //! encoder, palettes, quantile), `criteria` (the stop criteria of the scene file, the
 //! command line and the run), `input` (scene-file entries read with their key path,
-//! value checks) → `photometry` → `light` → `scene` → `surface` → `accel` → `tally` →
+//! value checks) → `photometry` → `light` → `surface` → `scene` → `accel` → `tally` →
 //! `trace` → `stats` → `distributed` → `run` → `checkpoint` → `output` → `render` →
 //! `limits` → `fixtures`. docs/architecture.md has the whole data path.
 

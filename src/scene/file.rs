@@ -3,11 +3,11 @@
 //! the key path, `objects[2].radius`, through `serde_path_to_error`). Nothing here checks
 //! physics; `load` validates and converts.
 
-pub use super::material::MaterialFile;
 use super::shapes;
 use super::Estimator;
 use crate::error::{Error, Result};
 use crate::input::{self, check_keys, Coords, Length};
+pub use crate::surface::MaterialFile;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 

@@ -14,16 +14,15 @@ pub mod file;
 pub mod fingerprint;
 mod instance;
 mod load;
-mod material;
 pub mod mesh_io;
 mod objects;
 pub mod shapes;
 mod triangle_ids;
 
 pub use crate::light::Luminaire;
+pub use crate::surface::{Material, MaterialFile};
 pub use instance::{Instance, Instanced, Placement, Prototype, PrototypeMesh};
 pub use load::{load, load_str};
-pub use material::{Material, MaterialFile};
 pub use triangle_ids::TriangleIds;
 
 /// All triangles of the scene in one indexed mesh, in the re-centred local frame.

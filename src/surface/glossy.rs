@@ -4,9 +4,9 @@
 
 use super::fresnel::fr_dielectric;
 use super::microfacet::{ggx_d, ggx_g, ggx_g1, ggx_sample_visible, ggx_visible_d, Frame};
+use super::Material;
 use super::{Bsdf, Continuation, Incidence, Lobe, LobeKind, Sample, CONNECT_MIN_ALPHA};
 use crate::sampling::uniform;
-use crate::scene::Material;
 use glam::DVec3;
 use rand_pcg::Pcg32;
 use std::f64::consts::PI;
