@@ -12,7 +12,7 @@
 //! Adding a light kind: a file here with its entry struct (implementing [`LightFile`]),
 //! its light ([`Light`]) and emitter ([`Emitter`]), and one line in `registry!`. A light
 //! made by a program rather than read from a file only needs the two traits: push it into
-//! `Scene::lights` (tests/custom_light.rs).
+//! `Scene::lights` (tests/suite/physics/custom_light.rs).
 //!
 //! Emitters are called through `dyn`: one call per photon emitted and per piece of
 //! direct light, each followed by at least one ray cast, which costs far more.

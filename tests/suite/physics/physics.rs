@@ -1,7 +1,7 @@
 //! The photon pass against analytic truth. Every tolerance comes from the σ the run
 //! reports: per-cell z-scores must be calibrated (RMS within [0.85, 1.2]).
 
-mod common;
+use crate::common;
 
 use common::*;
 use luxtally::scene::Estimator;

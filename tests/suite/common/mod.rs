@@ -174,7 +174,7 @@ pub fn cell_average(f: impl Fn(f64, f64) -> f64, x0: f64, x1: f64, y0: f64, y1: 
 
 /// A luminance meter of 16 × 16 cells just above a 40 m grey floor (ρ = 0.6), 2 m under
 /// a 1000 cd point source: L = ρE/π, cells in the near zone of the floor few photons
-/// reach (tests/physics.rs, tests/calibration.rs).
+/// reach (tests/suite/physics/physics.rs, tests/suite/physics/calibration.rs).
 pub const NEAR_ZONE_METER: &str = r#"
     [materials.floor]
     reflectance = 0.6

@@ -2,7 +2,7 @@
 //! illuminance against the interpolant's own intensities, orientation (aim,
 //! rotate_deg), IES and EULUMDAT alike, far and near field of a large opening.
 
-mod common;
+use crate::common;
 
 use common::*;
 use glam::DVec3;

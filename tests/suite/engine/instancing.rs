@@ -3,7 +3,7 @@
 //! keep their outside, both backends agree, and scenes too large to flatten are refused
 //! in one line or traced without flattening.
 
-mod common;
+use crate::common;
 
 use glam::{DVec3, Vec3};
 use luxtally::accel::{self, Backend, HitBatch, RayBatch, INSTANCE_HIT, NO_HIT};

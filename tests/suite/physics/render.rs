@@ -2,7 +2,7 @@
 //! map in a closed box, mirrors, area sources, thread and backend independence; and the
 //! bundled office's image stored as a test artifact.
 
-mod common;
+use crate::common;
 
 use common::{parallel_corner_factor, scene};
 use glam::DVec3;
@@ -548,8 +548,8 @@ fn render_command_writes_images_and_reuses_a_finished_run() {
 
 /// How the area-source sample count was chosen (docs/render.md): the relative noise of
 /// the direct term over pixels that all see (nearly) the same floor point, for n × n
-/// samples at heights h below a 1 × 0.8 m source. `cargo test --release --test render
-/// area_source_noise -- --ignored --nocapture`.
+/// samples at heights h below a 1 × 0.8 m source. `cargo test --release --test suite
+/// physics::render::area_source_noise -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn area_source_noise_by_sample_count() {

@@ -2,7 +2,7 @@
 //! symmetry form of LM-63 and EULUMDAT expanding to the same intensity function, tilt,
 //! units and factors, and one clear line (file and line number) for every malformed file.
 
-mod common;
+use crate::common;
 
 use common::gauss8;
 use glam::DVec3;

@@ -8,7 +8,7 @@
 //! fail them: 19 and 22 cells beyond 3σ, 4 and 6 beyond 4σ, worst −5.75σ and −7.17σ.
 //! The `study_*` tests (ignored) print the z-scores by effective number of scores.
 
-mod common;
+use crate::common;
 
 use common::*;
 use luxtally::accel::Backend;

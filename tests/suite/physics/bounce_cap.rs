@@ -3,7 +3,7 @@
 //! a closed lossless scene (infinite answer) is refused; an open lossless one runs and
 //! says what the cap stopped.
 
-mod common;
+use crate::common;
 
 use common::{options, run_options, scene};
 use luxtally::accel::Backend;

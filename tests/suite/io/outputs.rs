@@ -2,7 +2,7 @@
 //! the exr crate) and CSV, the scene map PLY (with a minimal PLY reader written here,
 //! independent of the writer), the PNG previews and a self-contained report.html.
 
-mod common;
+use crate::common;
 
 use common::*;
 use luxtally::accel::Backend;

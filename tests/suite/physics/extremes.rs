@@ -3,7 +3,7 @@
 //! the per-replicate scores; cells nothing reaches are dark with a bound, and targets
 //! that cannot be met say so.
 
-mod common;
+use crate::common;
 
 use common::*;
 use luxtally::stats::CellStatus;

@@ -1,7 +1,7 @@
 //! Engine properties: determinism across threads, backend parity, numerical extremes and
 //! degenerate scenes, stop criteria.
 
-mod common;
+use crate::common;
 
 use common::*;
 use luxtally::accel::Backend;

@@ -1,7 +1,7 @@
 //! Error estimates are calibrated, forecasts come true, and every stop criterion stops
 //! where it should and says why.
 
-mod common;
+use crate::common;
 
 use common::*;
 use luxtally::accel::Backend;

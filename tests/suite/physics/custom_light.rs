@@ -4,7 +4,7 @@
 //! reports, by the photon pass (its emission sampling) and by next-event estimation (the
 //! light it gives a point), and its flux must be what it declares.
 
-mod common;
+use crate::common;
 
 use common::*;
 use glam::DVec3;

@@ -5,7 +5,7 @@
 //! black room lit only by an area source (what `auto` picks), and a receiver nothing
 //! reaches (σ unknown, never converged).
 
-mod common;
+use crate::common;
 
 use common::*;
 use glam::DVec3;

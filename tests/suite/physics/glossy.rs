@@ -3,7 +3,7 @@
 //! glossy materials against independent references (furnace balance, the mirror limit,
 //! estimator agreement, the luminance of a glossy floor).
 
-mod common;
+use crate::common;
 
 use common::{
     assert_calibrated, cell_average, gauss8, mirror_image_cell_lx, options, point_in_sphere,
@@ -454,7 +454,7 @@ fn glossy_floor_luminance_next_event() {
 }
 
 /// Track and next-event estimates of every cell of `receiver` agree: z-score RMS of
-/// their differences in [0.8, 1.25] (as tests/engine.rs).
+/// their differences in [0.8, 1.25] (as tests/suite/engine/engine.rs).
 fn assert_estimators_agree(
     scene: &luxtally::scene::Scene,
     receiver: &str,
@@ -569,7 +569,7 @@ fn glossy_floor_shows_bsdf_times_illuminance() {
 
 #[test]
 fn nearly_smooth_glossy_wall_shows_the_floor_like_a_mirror() {
-    // tests/render.rs's mirror scene with the mirror made glossy of roughness 0.001: the
+    // tests/suite/physics/render.rs's mirror scene with the mirror made glossy of roughness 0.001: the
     // eye path continues through the sampled lobe with weight 0.8·G₂/G₁ ≈ 0.8.
     let s = common::scene(
         r#"

@@ -2,8 +2,8 @@
 //! where it has a `[camera]` — with a fixed seed and photon count, and each output file's
 //! hash is compared with `tests/data/golden_outputs.txt`. Refactors must leave every
 //! number alone; a change that means to alter results re-records the file with
-//! `LUXTALLY_BLESS=1 cargo test --release --features obvhs --test bit_identity`, and says
-//! why in its commit.
+//! `LUXTALLY_BLESS=1 cargo test --release --features obvhs --test suite bit_identity`, and
+//! says why in its commit.
 //!
 //! What the hashes hold for, and so what each test compares on any machine:
 //! - **obvhs** is pure Rust built for baseline x86-64, and its maths is the pure-Rust libm

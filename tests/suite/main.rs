@@ -1,0 +1,63 @@
+//! The integration tests as one binary (issue 26): each test binary links the crate and
+//! Embree, so one binary for all of them builds and links once instead of ~30 times.
+//! Its modules are themes, one folder each, holding the files that were binaries of
+//! their own (their test names gain the prefix `theme::file::`). Run one theme or file
+//! with a filter: `cargo test --release --test suite physics::render::`.
+//!
+//! The tests share one process and run on parallel threads, so none may change
+//! process-wide state (environment variables, the current directory, rayon's global
+//! pool, signal handlers): a test that needs such a change gives it to a child process
+//! (`Command::env`, `current_dir`). Three binaries stay on their own: `huge_pages`
+//! (turns transparent huge pages off for the whole process and measures the process's
+//! huge pages, which any other test's large build here would change), `report_browser`
+//! (its own harness, libtest-mimic) and `mpi` (feature `mpi`, launched by scripts/test.sh).
+
+// Themes hold files named as they were as binaries: `physics::physics`, `cli::cli`.
+#![allow(clippy::module_inception)]
+
+mod common;
+
+mod physics {
+    mod accuracy;
+    mod bounce_cap;
+    mod calibration;
+    mod custom_light;
+    mod direct_light;
+    mod extremes;
+    mod glossy;
+    mod luminaires;
+    mod physics;
+    mod render;
+}
+
+mod engine {
+    mod backend_parity;
+    mod bit_identity;
+    mod engine;
+    mod instancing;
+}
+
+mod io {
+    mod bad_input;
+    mod f32_range;
+    mod fuzz;
+    mod outputs;
+    mod photometry;
+    mod scene_loading;
+    mod scene_paths;
+}
+
+mod cli {
+    mod cli;
+    mod limits;
+    mod progress;
+}
+
+mod distributed {
+    mod resume;
+}
+
+mod project {
+    mod layering;
+    mod setup_script;
+}
