@@ -118,7 +118,7 @@ impl Opening {
     pub fn sample_point_m(&self, rng: &mut Pcg32) -> DVec3 {
         match *self {
             Opening::Point => DVec3::ZERO,
-            // Arguments are evaluated left to right: a is drawn first, as before.
+            // Arguments are evaluated left to right: a is drawn first (the bits depend on it).
             Opening::Rectangle { .. } => self.point_at(uniform(rng), uniform(rng)),
             Opening::Disc { diameter_m } => disc_point(rng, diameter_m, diameter_m),
             Opening::Ellipse { length_m, width_m } => disc_point(rng, length_m, width_m),

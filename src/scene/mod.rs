@@ -248,7 +248,7 @@ impl Estimator {
     }
 
     /// Diffuse and connectable glossy vertices are connected to the receiver by shadow
-    /// rays beyond its near zone, and their segments no longer score by crossing there.
+    /// rays beyond its near zone, and their segments do not score by crossing there.
     /// Segments leaving specular vertices always score by crossing.
     pub fn connects(self) -> bool {
         matches!(self, Estimator::NextEvent)

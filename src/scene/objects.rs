@@ -312,7 +312,7 @@ impl Placed {
         Ok(())
     }
 
-    /// Mapped: flattened in f64, as every object was before instancing; refused before
+    /// Mapped: flattened in f64 into the scene's one triangle mesh; refused before
     /// the flattening allocates when its copies would pass [`MAX_MAPPED_TRIANGLES`].
     fn add_mapped(
         &self,
