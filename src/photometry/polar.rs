@@ -7,8 +7,7 @@
 use super::Photometry;
 use crate::raster::encode_rgb_png;
 use crate::raster::font::{draw_text, text_width};
-use crate::{Error, Result};
-use std::path::Path;
+use crate::Result;
 
 /// Curves in cd/klm at `gamma_deg`, one per half-plane.
 #[derive(Clone, Debug, PartialEq)]
@@ -233,12 +232,6 @@ pub fn polar_diagram(p: &Photometry) -> PolarImage {
 pub fn polar_diagram_png(p: &Photometry) -> Result<Vec<u8>> {
     let img = polar_diagram(p);
     encode_rgb_png(img.width, img.height, &img.rgb)
-}
-
-/// Writes the polar diagram of `p` to `path` as PNG.
-pub fn write_polar_png(p: &Photometry, path: &Path) -> Result<()> {
-    let bytes = polar_diagram_png(p)?;
-    std::fs::write(path, bytes).map_err(|e| Error::io(path, e))
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! `luxtally photometry`: a photometric file's facts on stdout, its polar diagram as PNG.
 
-use luxtally::photometry;
-use luxtally::Result;
+use luxtally::{output, photometry, Result};
+use std::io::Write;
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
@@ -21,7 +21,8 @@ pub fn command(args: PhotometryArgs) -> Result<()> {
             .map_or("luminaire".into(), |s| s.to_string_lossy());
         PathBuf::from(format!("{stem}_polar.png"))
     });
-    photometry::polar::write_polar_png(&p, &out)?;
+    let png = photometry::polar::polar_diagram_png(&p)?;
+    output::write_atomic(&out, |w| w.write_all(&png))?;
     for line in p.summary_lines() {
         println!("{line}");
     }
