@@ -1,5 +1,6 @@
-//! The integration tests as one binary (issue 26): each test binary links the crate and
-//! Embree, so one binary for all of them builds and links once instead of ~30 times.
+//! The integration tests as one binary: the crate is linked into one test binary instead
+//! of ~30 (the target directory is less than half the size; the build takes about as
+//! long, BENCHMARKS.md), and a crash in any test shows in `.ci/run`'s totals.
 //! Its modules are themes, one folder each, holding the files that were binaries of
 //! their own (their test names gain the prefix `theme::file::`). Run one theme or file
 //! with a filter: `cargo test --release --test suite physics::render::`.
