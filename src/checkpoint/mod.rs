@@ -167,11 +167,18 @@ impl<'a> Checkpoint<'a> {
         self.tallies.photons
     }
 
-    /// The run's record to go on from; `None` if the cells do not read back.
-    pub fn into_progress(self) -> Option<Progress> {
+    /// The run's record to go on from; cells that do not read back are refused,
+    /// naming `origin`.
+    pub fn into_progress(self, origin: String) -> Result<Progress> {
         let [elapsed_s, stats_s, merge_s, direct_s] = self.times_s;
-        Some(Progress {
-            tallies: self.tallies.into_tallies()?,
+        let tallies = self.tallies.into_tallies().ok_or_else(|| {
+            Error::input(
+                origin,
+                "the checkpoint's cells are corrupt (they do not read back)",
+            )
+        })?;
+        Ok(Progress {
+            tallies,
             history: self.history.iter().map(SavedPoint::point).collect(),
             forecast: None,
             direct_schedule: DirectSchedule {

@@ -61,12 +61,7 @@ fn start_from(
         ));
     }
     let scene_path = checkpoint.scene_path.clone();
-    let resumed = checkpoint.into_progress().ok_or_else(|| {
-        Error::input(
-            scene_path,
-            "the checkpoint's cells are corrupt (they do not read back)",
-        )
-    })?;
+    let resumed = checkpoint.into_progress(scene_path)?;
     Ok(Start {
         resumed: Some(resumed),
         shard,

@@ -22,13 +22,7 @@ pub fn merge_shards(
     check_shards(scene, options, &mut shards)?;
     let mut records = Vec::with_capacity(shards.len());
     for (path, c) in shards {
-        let record = c.into_progress().ok_or_else(|| {
-            Error::input(
-                path.display().to_string(),
-                "corrupt: its cells do not read back",
-            )
-        })?;
-        records.push(record);
+        records.push(c.into_progress(path.display().to_string())?);
     }
     run::merge(scene, options, caster, setup, &records)
 }
