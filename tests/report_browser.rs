@@ -137,6 +137,11 @@ fn assert_report_renders(report: &Path, name: &str, receivers: usize) {
         "{name}: accuracy chart + 5 per receiver"
     );
     assert_eq!(rendered, charts, "{name}: every chart rendered");
+    assert_eq!(
+        html.matches("data-receiver=").count(),
+        receivers,
+        "{name}: one results row per receiver"
+    );
     assert!(
         html.contains("<pre id=\"errors\"></pre>"),
         "{name}: the page reported errors: {}",

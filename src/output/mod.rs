@@ -225,7 +225,7 @@ pub fn rebuild_report(out: &Path) -> Result<()> {
     write_report_html(out, &summary_json(&summary)?, report::DEFAULT_REFRESH_S)
 }
 
-/// `receivers/NAME.{exr,csv}`.
+/// `receivers/NAME.{exr,csv}` and `receivers/NAME_figures.csv`.
 fn write_receiver_files(out: &Path, state: &RunState<'_>, s: &summary::Summary) -> Result<()> {
     let dir = out.join("receivers");
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
@@ -236,6 +236,8 @@ fn write_receiver_files(out: &Path, state: &RunState<'_>, s: &summary::Summary) 
             write_bytes(&dir.join(format!("{stem}.exr")), &exr)?;
             let csv = receiver_files::receiver_csv(r, rs);
             write_bytes(&dir.join(format!("{stem}.csv")), csv.as_bytes())?;
+            let figures = receiver_files::figures_csv(rs);
+            write_bytes(&dir.join(format!("{stem}_figures.csv")), figures.as_bytes())?;
         }
     }
     Ok(())

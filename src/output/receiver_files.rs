@@ -14,6 +14,12 @@
 //! `i,j,x_m,y_m,z_m,value,sigma,rel_error,hits,scoring_histories,vov,dof,status,upper_bound`,
 //! the cell centre in world metres and f64 numbers printed in full round-trip precision
 //! (`NaN` where unknown; `upper_bound` only for dark and unreliable cells).
+//!
+//! Figures CSV (`receivers/NAME_figures.csv`): the receiver's designer figures
+//! (summary.json's `figures`), one row each of `mean`, `min`, `max`, `u0`, `g2`:
+//! `figure,value,low,high,confidence,cell,point,reliable`, `cell` the extreme cell's
+//! index (empty for the others), `point` how the value was formed (`plug_in` for the
+//! minimum and maximum, `mean` for the mean, `ratio` for U0 and g2).
 
 use crate::output::summary::ReceiverSummary;
 use crate::scene::Receiver;
@@ -65,6 +71,27 @@ pub fn receiver_exr(name: &str, r: &ReceiverSummary) -> Result<Vec<u8>> {
         .to_buffered(&mut bytes)
         .map_err(|e| Error::Unsupported(format!("receivers/{name}.exr: {e}")))?;
     Ok(bytes.into_inner())
+}
+
+/// The figures CSV of a receiver.
+pub fn figures_csv(r: &ReceiverSummary) -> String {
+    let f = &r.figures;
+    let mut s = String::from("figure,value,low,high,confidence,cell,point,reliable\n");
+    let cell = |k: usize| k.to_string();
+    for (name, figure, cell, point) in [
+        ("mean", &f.mean, String::new(), "mean"),
+        ("min", &f.min, cell(f.min_cell), f.min_point.as_str()),
+        ("max", &f.max, cell(f.max_cell), "plug_in"),
+        ("u0", &f.u0, String::new(), "ratio"),
+        ("g2", &f.g2, String::new(), "ratio"),
+    ] {
+        let _ = writeln!(
+            s,
+            "{name},{},{},{},{},{cell},{point},{}",
+            figure.value, figure.low, figure.high, f.confidence, f.reliable
+        );
+    }
+    s
 }
 
 /// The CSV of a receiver, with cell centres from its geometry.

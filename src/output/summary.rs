@@ -4,6 +4,7 @@
 
 use crate::run::RunState;
 use crate::scene::{Estimator, Quantity};
+use crate::stats::figures::{self, Figures};
 use crate::stats::forecast::HistoryPoint;
 use crate::stats::null_as_nan;
 use crate::stats::stop::Target;
@@ -168,6 +169,9 @@ pub struct ReceiverSummary {
     pub dark_cells: usize,
     #[serde(deserialize_with = "null_as_nan::f64")]
     pub dark_upper_bound: f64,
+    /// The designer's figures over the cells: Ē, Emin, Emax, U0, g2 with intervals at
+    /// `[simulation] confidence` (docs/designers.md).
+    pub figures: Figures,
 }
 
 #[derive(Serialize, Deserialize, Default)]
@@ -306,6 +310,15 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
         .filter(|(c, _)| c.hits > 0)
         .map(|(_, &vov)| vov)
         .fold(0.0, f64::max);
+    let total = t.receiver_total(&state.scene.receivers, index);
+    let (mean, mean_sigma, mean_vov) = figures::mean_and_sigma(&stats, cells, total, t.counts());
+    let figures = figures::figures(
+        &stats,
+        mean,
+        mean_sigma,
+        mean_vov,
+        state.scene.simulation.confidence,
+    );
     let (quantity, unit) = match r.quantity {
         Quantity::Illuminance => ("illuminance", "lx"),
         Quantity::Luminance { .. } => ("luminance", "cd/m2"),
@@ -336,6 +349,7 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
         unreliable_cells: stats.unreliable_cells,
         dark_cells: stats.dark_cells,
         dark_upper_bound: stats.dark_bound,
+        figures,
     }
 }
 

@@ -231,8 +231,22 @@ fn simulation(value: toml::Value, origin: &str) -> Result<Simulation> {
         .remove("seed")
         .map(|v| file::entry::<u64>(v, origin, "simulation.seed"))
         .transpose()?;
-    // `seed` and the stop criteria's keys, named together when one is unknown.
-    let own: Vec<&str> = std::iter::once("seed")
+    let confidence = table
+        .remove("confidence")
+        .map(|v| file::entry::<f64>(v, origin, "simulation.confidence"))
+        .transpose()?;
+    if let Some(c) = confidence {
+        if !(c > 0.0 && c < 1.0) {
+            return Err(Error::input(
+                format!("{at}.confidence"),
+                format!("must be between 0 and 1 (e.g. 0.95), got {c}"),
+            ));
+        }
+    }
+    // `seed`, `confidence` and the stop criteria's keys, named together when one is
+    // unknown.
+    let own: Vec<&str> = ["seed", "confidence"]
+        .into_iter()
         .chain(crate::input::fields_of::<StopCriteria>().iter().copied())
         .collect();
     crate::input::check_keys(&table, &own, &[], &at, "[simulation]")?;
@@ -241,5 +255,6 @@ fn simulation(value: toml::Value, origin: &str) -> Result<Simulation> {
     Ok(Simulation {
         stop,
         seed: seed.unwrap_or(1),
+        confidence: confidence.unwrap_or(super::DEFAULT_CONFIDENCE),
     })
 }

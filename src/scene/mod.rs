@@ -297,12 +297,28 @@ impl Receiver {
     }
 }
 
+/// Confidence of the receivers' figures' intervals unless the scene says otherwise.
+pub const DEFAULT_CONFIDENCE: f64 = 0.95;
+
 /// The scene's `[simulation]` table: when to stop (the command line overrides it key
 /// by key) and the seed.
-#[derive(Clone, Debug, PartialEq, Default)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Simulation {
     pub stop: StopCriteria,
     pub seed: u64,
+    /// Two-sided confidence of the receivers' figures' intervals (`confidence`, 0.95 by
+    /// default). It changes no photon's numbers, so a checkpoint resumes under another.
+    pub confidence: f64,
+}
+
+impl Default for Simulation {
+    fn default() -> Self {
+        Simulation {
+            stop: StopCriteria::default(),
+            seed: 0,
+            confidence: DEFAULT_CONFIDENCE,
+        }
+    }
 }
 
 /// A loaded, validated scene.

@@ -1,6 +1,7 @@
 //! Statistics of the tallies: the equations of method.md, evaluated once per epoch.
 //! They only read tallies; they never touch the photon path.
 
+pub mod figures;
 pub mod forecast;
 mod map;
 mod receiver;

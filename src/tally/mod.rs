@@ -332,7 +332,8 @@ pub struct Tallies {
     pub history_hits: [u128; 4],
     /// Photon hits per triangle and [`deposit_code`] slot.
     pub triangle_hits: TriangleCounts,
-    /// One entry per cell of every receiver, receivers in scene order.
+    /// One entry per cell of every receiver, receivers in scene order, then one per
+    /// receiver for its mean ([`Tallies::receiver_total`]).
     pub cells: Vec<CellSums>,
     /// Direct-light replicates added to every next-event receiver's cells so far, and
     /// the shadow rays they took.
@@ -395,6 +396,14 @@ impl Tallies {
     pub fn receiver_cells(&self, receivers: &[crate::scene::Receiver], r: usize) -> &[CellSums] {
         let first: usize = receivers[..r].iter().map(|x| x.cell_count()).sum();
         &self.cells[first..first + receivers[r].cell_count()]
+    }
+
+    /// The histories of receiver `r`'s mean over its cells (photons only: its sampled
+    /// direct light stays in the cells). One such slot per receiver follows all the
+    /// receivers' cells, in order.
+    pub fn receiver_total(&self, receivers: &[crate::scene::Receiver], r: usize) -> &CellSums {
+        let cells: usize = receivers.iter().map(|x| x.cell_count()).sum();
+        &self.cells[cells + r]
     }
 
     /// Photons of odd and of even index among the first `photons`.

@@ -72,6 +72,8 @@ pub struct Tracer<'a> {
     /// connection and the general scattering, a loop small enough to keep its state in
     /// registers.
     lambert_track: bool,
+    /// Where each receiver's per-history mean is tallied.
+    total_spans: Vec<TotalSpan>,
 }
 
 impl<'a> Tracer<'a> {
@@ -127,6 +129,7 @@ impl<'a> Tracer<'a> {
             receiver_slack: 1e-5 * scene_scale as f64,
             any_connects,
             lambert_track,
+            total_spans: TotalSpan::of(&receivers),
             receivers,
         }
     }
@@ -134,7 +137,7 @@ impl<'a> Tracer<'a> {
     /// Empty tallies for this scene's triangles and receiver cells.
     pub fn new_tallies(&self) -> Tallies {
         let unit = self.emitters.score_unit;
-        let mut t = Tallies::new(self.geometry.triangle_count(), self.cell_count(), unit);
+        let mut t = Tallies::new(self.geometry.triangle_count(), self.tally_slots(), unit);
         t.dark = !(self.emitters.total_flux_lm > 0.0);
         t
     }
@@ -152,6 +155,11 @@ impl<'a> Tracer<'a> {
     /// Total number of receiver cells.
     pub fn cell_count(&self) -> usize {
         self.receivers.iter().map(|r| r.cell_count()).sum()
+    }
+
+    /// The receivers' cells and, after them, one total slot per receiver.
+    pub fn tally_slots(&self) -> usize {
+        self.cell_count() + self.receivers.len()
     }
 
     /// Traces photons `first .. first + count` to the end of their histories into
@@ -201,6 +209,7 @@ impl<'a> Tracer<'a> {
         }
         fold_histories(
             &mut scratch.pending,
+            &self.total_spans,
             &mut scratch.cell_acc,
             &mut tally.scores,
         );
@@ -406,16 +415,47 @@ impl<'a> Tracer<'a> {
     }
 }
 
+/// Where a receiver's per-history total is tallied: its cells `first..end` and the slot
+/// after every receiver's cells that holds the histories of its mean over them.
+#[derive(Clone, Copy, Debug)]
+pub struct TotalSpan {
+    pub first: u32,
+    pub end: u32,
+    pub slot: u32,
+    /// 1 / cells: a history's contribution to the mean over the cells.
+    pub per_cell: f64,
+}
+
+impl TotalSpan {
+    /// The spans of `receivers`, whose total slots follow all their cells in order.
+    pub fn of(receivers: &[ReceiverGrid]) -> Vec<TotalSpan> {
+        let cells: u32 = receivers.iter().map(|r| r.cell_count() as u32).sum();
+        (receivers.iter().enumerate())
+            .map(|(k, r)| TotalSpan {
+                first: r.first_cell,
+                end: r.first_cell + r.cell_count() as u32,
+                slot: cells + k as u32,
+                per_cell: 1.0 / r.cell_count() as f64,
+            })
+            .collect()
+    }
+}
+
 /// Sums each photon history's scores per cell (a photon crossing a cell twice scores
 /// once, with the sum), so Σx² is over histories as eqs. 6–8 require, then adds the
 /// histories of the chunk per cell (in the worker, so the epoch's merge handles one
-/// entry per touched cell, not one per history). `acc` is scratch indexed by cell.
+/// entry per touched cell, not one per history). Each history's mean over a receiver's
+/// cells goes to the receiver's total slot (`spans`), so the receiver mean's variance
+/// carries the covariance between its cells. `acc` is scratch indexed by cell.
 fn fold_histories(
     pending: &mut [(u32, u32, f64)],
+    spans: &[TotalSpan],
     acc: &mut Vec<CellPartial>,
     out: &mut Vec<CellPartial>,
 ) {
     pending.sort_by_key(|&(offset, cell, _)| (offset, cell));
+    // The history being summed over a receiver: (photon offset, span, sum, hits).
+    let mut total: Option<(u32, usize, f64, u64)> = None;
     let mut k = 0;
     while k < pending.len() {
         let (offset, cell, mut x) = pending[k];
@@ -426,23 +466,51 @@ fn fold_histories(
             hits += 1;
             k += 1;
         }
-        if acc.len() <= cell as usize {
-            acc.resize(cell as usize + 1, CellPartial::default());
+        add_history(acc, out, cell, x, hits);
+        let span = spans.partition_point(|s| s.end <= cell);
+        match &mut total {
+            Some((o, s, sum, h)) if *o == offset && *s == span => {
+                *sum += x;
+                *h += hits;
+            }
+            _ => {
+                if let Some((_, s, sum, h)) = total {
+                    add_history(acc, out, spans[s].slot, sum * spans[s].per_cell, h);
+                }
+                total = (span < spans.len()).then_some((offset, span, x, hits));
+            }
         }
-        let slot = &mut acc[cell as usize];
-        if slot.hits == 0 {
-            slot.cell = cell;
-            out.push(CellPartial {
-                cell,
-                ..CellPartial::default()
-            });
-        }
-        slot.add_history(x, hits);
+    }
+    if let Some((_, s, sum, h)) = total {
+        add_history(acc, out, spans[s].slot, sum * spans[s].per_cell, h);
     }
     out.sort_by_key(|p| p.cell);
     for p in out.iter_mut() {
         *p = std::mem::take(&mut acc[p.cell as usize]);
     }
+}
+
+/// One history's score `x` (from `hits` scores) for `cell`, in the scratch `acc`; a
+/// cell's first history lists it in `out`.
+fn add_history(
+    acc: &mut Vec<CellPartial>,
+    out: &mut Vec<CellPartial>,
+    cell: u32,
+    x: f64,
+    hits: u64,
+) {
+    if acc.len() <= cell as usize {
+        acc.resize(cell as usize + 1, CellPartial::default());
+    }
+    let slot = &mut acc[cell as usize];
+    if slot.hits == 0 {
+        slot.cell = cell;
+        out.push(CellPartial {
+            cell,
+            ..CellPartial::default()
+        });
+    }
+    slot.add_history(x, hits);
 }
 
 #[cfg(test)]
@@ -454,7 +522,7 @@ mod tests {
         // Photon 1 crosses cell 5 twice (one history score of 4) and cell 2 once.
         let mut pending = vec![(1, 5, 1.0), (0, 5, 2.0), (1, 5, 3.0), (1, 2, 4.0)];
         let (mut acc, mut out) = (Vec::new(), Vec::new());
-        fold_histories(&mut pending, &mut acc, &mut out);
+        fold_histories(&mut pending, &[], &mut acc, &mut out);
         // Cell 2: one history of 4; cell 5: histories of 2 and 4 (mean 3, M₂ = 2, M₃ = 0,
         // M₄ = 2).
         let moments = |n, mean, m2, m4| crate::tally::Moments {
@@ -476,6 +544,41 @@ mod tests {
                 cell(5, 3, moments(2, 3.0, 2.0, 2.0))
             ]
         );
+        assert!(acc.iter().all(|p| p.hits == 0), "scratch left clean");
+    }
+
+    #[test]
+    fn each_history_adds_its_mean_over_the_receiver_to_its_total_slot() {
+        // Receiver A: cells 0..4 (total slot 6); receiver B: cells 4..6 (slot 7).
+        let spans = [
+            TotalSpan {
+                first: 0,
+                end: 4,
+                slot: 6,
+                per_cell: 0.25,
+            },
+            TotalSpan {
+                first: 4,
+                end: 6,
+                slot: 7,
+                per_cell: 0.5,
+            },
+        ];
+        // Photon 0 scores A twice (cells 1, 3) and B once; photon 1 scores A once.
+        let mut pending = vec![(0, 3, 2.0), (1, 2, 8.0), (0, 1, 6.0), (0, 5, 4.0)];
+        let (mut acc, mut out) = (Vec::new(), Vec::new());
+        fold_histories(&mut pending, &spans, &mut acc, &mut out);
+        let slot = |cell| out.iter().find(|p: &&CellPartial| p.cell == cell).unwrap();
+        // A's histories: (6 + 2)/4 = 2 and 8/4 = 2; B's: 4/2 = 2.
+        assert_eq!(
+            (slot(6).moments.n, slot(6).moments.mean, slot(6).hits),
+            (2, 2.0, 3)
+        );
+        assert_eq!(
+            (slot(7).moments.n, slot(7).moments.mean, slot(7).hits),
+            (1, 2.0, 1)
+        );
+        assert_eq!(out.len(), 6, "four cells and two totals");
         assert!(acc.iter().all(|p| p.hits == 0), "scratch left clean");
     }
 }

@@ -25,6 +25,7 @@ mod physics {
     mod custom_light;
     mod direct_light;
     mod extremes;
+    mod figures;
     mod glossy;
     mod luminaires;
     mod physics;

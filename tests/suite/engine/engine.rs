@@ -183,7 +183,15 @@ fn zero_flux_lights_give_zeros_not_nan() {
     assert_eq!(s.receivers["r"].values, vec![0.0; 4]);
     assert_eq!(s.receivers["r"].sigma, vec![0.0; 4], "no light: exactly 0");
     assert_eq!(s.global.mean_illuminance_lx, 0.0);
-    assert_all_finite(&s);
+    // U0 = Emin/Ē and g2 = Emin/Emax are 0/0 here: undefined, and said so.
+    let f = &s.receivers["r"].figures;
+    assert_eq!(
+        (f.mean.value, f.mean.low, f.mean.high, f.min.high),
+        (0.0, 0.0, 0.0, 0.0)
+    );
+    assert!(f.u0.value.is_nan() && f.g2.value.is_nan(), "{f:?}");
+    assert!(f.note.contains("undefined"), "{}", f.note);
+    assert_finite_except(&s, &[".figures.u0", ".figures.g2"]);
 }
 
 #[test]
@@ -238,11 +246,22 @@ fn receiver_no_photon_reaches_reads_zero_with_unknown_error() {
     assert!(r.sigma.iter().all(|x| x.is_nan()), "σ unknown, not 0");
     assert_eq!(r.unknown_cells, 9);
     assert!(r.rel_error.arithmetic.is_nan());
-    // Only the unknown errors are null: σ, the receiver's mean error and the history
-    // of the target's error.
+    // Only the unknown errors are null: σ, the receiver's mean error, the history of
+    // the target's error and the intervals of its figures.
     assert_finite_except(
         &s,
-        &[".sigma", ".rel_error", ".rel_error_known_cells", ".history"],
+        &[
+            ".sigma",
+            ".rel_error",
+            ".rel_error_known_cells",
+            ".history",
+            "outside.figures",
+        ],
+    );
+    let f = &s.receivers["outside"].figures;
+    assert!(
+        f.mean.low.is_nan() && f.min.low.is_nan() && !f.reliable,
+        "{f:?}"
     );
 }
 

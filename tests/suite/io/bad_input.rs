@@ -325,6 +325,10 @@ fn bad_receiver_and_simulation_parameters_are_rejected() {
     assert_has(&m, &["receivers[0].name", "empty"]);
     let m = error_of("[simulation]\nphotons = 0\n");
     assert_has(&m, &["simulation.photons"]);
+    for bad in ["0", "1", "1.5", "-0.5"] {
+        let m = error_of(&format!("[simulation]\nconfidence = {bad}\n"));
+        assert_has(&m, &["simulation.confidence", "between 0 and 1"]);
+    }
     let m = error_of("[simulation]\nphotons = -3\n");
     assert_has(&m, &["simulation.photons"]);
     let m = error_of("[simulation]\ntime_limit = 0\n");
