@@ -44,6 +44,17 @@ pub struct StopCriteria {
     #[serde(default)]
     #[arg(long)]
     pub stop_if_unreachable: bool,
+    /// Stop once every [[requirements]] check is decided, PASS or FAIL, at the scene's
+    /// confidence (anytime-valid: looking every epoch does not raise the error rate).
+    #[arg(long, value_enum)]
+    pub until: Option<Until>,
+}
+
+/// `--until decided` (`until = "decided"`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum Until {
+    Decided,
 }
 
 impl StopCriteria {
@@ -58,6 +69,7 @@ impl StopCriteria {
             absolute: over.absolute || self.absolute,
             min_hits: over.min_hits.or(self.min_hits),
             stop_if_unreachable: over.stop_if_unreachable || self.stop_if_unreachable,
+            until: over.until.or(self.until),
         }
     }
 

@@ -8,6 +8,7 @@ use crate::stats::figures::{self, Figures};
 use crate::stats::forecast::HistoryPoint;
 use crate::stats::null_as_nan;
 use crate::stats::stop::Target;
+use crate::stats::verdict::{verdicts, Verdicts};
 use crate::stats::{
     cell_vov, direct_estimate, figure_of_merit, map_stats, mean_illuminance_sigma_lx,
     mean_illuminance_vov, receiver_stats, reliability, Averaged, CellStatus, MapKind, Reliability,
@@ -79,6 +80,8 @@ pub struct Summary {
     /// or the forecast is beyond the photon or time budget (`--stop-if-unreachable` ends
     /// the run then); null while it may be met, and without a target.
     pub target_unreachable: Option<String>,
+    /// The verdicts on the scene's `[[requirements]]` (null without any).
+    pub verdicts: Option<Verdicts>,
 }
 
 #[derive(Serialize, Deserialize, Default)]
@@ -283,6 +286,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
             state.target,
             state.progress,
         ),
+        verdicts: (!scene.requirements.is_empty()).then(|| verdicts(scene, t)),
         forecast: match (state.options.stop.target_error, state.progress.forecast) {
             (Some(target_error), Some(f)) => Some(ForecastSummary {
                 target_error,

@@ -3,10 +3,12 @@
 
 use super::engine::{next_schedule_point, Engine};
 use super::{target_error, target_unreachable, Progress, RunOptions, RunSetup, RunState, Start};
+use crate::criteria::Until;
 use crate::distributed::Distributor;
 use crate::scene::Scene;
 use crate::stats::forecast::{forecast, HistoryPoint};
 use crate::stats::stop::{min_hits, StopReason, Target};
+use crate::stats::verdict::verdicts;
 use crate::tally::ChunkTally;
 use crate::trace::direct::PILOT_REPLICATES;
 use crate::trace::{Scratch, CHUNK_PHOTONS};
@@ -212,8 +214,19 @@ impl<'r, 's> Epochs<'r, 's> {
         interrupt: &AtomicBool,
     ) -> Option<StopReason> {
         let stop = &self.options.stop;
+        let decided = || {
+            let (scene, tallies) = (self.scene, &self.progress.tallies);
+            stop.until == Some(Until::Decided)
+                && self
+                    .engine
+                    .pool
+                    .install(|| verdicts(scene, tallies))
+                    .decided()
+        };
         if stop.target_error.is_some_and(|goal| error <= goal) {
             Some(StopReason::TargetError)
+        } else if decided() {
+            Some(StopReason::Decided)
         } else if stop
             .min_hits
             .is_some_and(|n| self.fewest_hits.is_some_and(|h| h >= n))

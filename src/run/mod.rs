@@ -277,6 +277,12 @@ fn validate(scene: &Scene, options: &RunOptions) -> Result<(Target, u64)> {
         ));
     }
     options.stop.validate(criteria::flag)?;
+    if options.stop.until == Some(criteria::Until::Decided) && scene.requirements.is_empty() {
+        return Err(Error::input(
+            "--until decided",
+            "the scene has no [[requirements]] to decide",
+        ));
+    }
     let max_photons = options.stop.max_photons();
     Ok((target, max_photons))
 }

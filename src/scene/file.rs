@@ -26,8 +26,23 @@ pub struct SceneFile {
     pub lights: Vec<toml::Value>,
     #[serde(default)]
     pub receivers: Vec<ReceiverFile>,
+    #[serde(default)]
+    pub requirements: Vec<RequirementFile>,
     pub simulation: Option<toml::Value>,
     pub camera: Option<CameraFile>,
+}
+
+/// A `[[requirements]]` entry: the least values a receiver's figures must reach.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct RequirementFile {
+    pub name: Option<String>,
+    pub receiver: String,
+    /// Ē (maintained), in the receiver's unit.
+    pub em: Option<f64>,
+    pub emin: Option<f64>,
+    pub u0: Option<f64>,
+    pub g2: Option<f64>,
 }
 
 /// `scale = 2` or `scale = [1, 2, 1]`.

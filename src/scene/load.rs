@@ -5,9 +5,12 @@
 // `!(x > 0.0)` is deliberate: it also rejects NaN (e.g. from an overflowing cross product).
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::file::{self, CameraFile, QuantityName, ReceiverFile};
+use super::file::{self, CameraFile, QuantityName, ReceiverFile, RequirementFile};
 use super::objects::{load_object, GeometryBuilder};
-use super::{Camera, Estimator, Material, Quantity, Receiver, Scene, SceneLight, Simulation};
+use super::{
+    Camera, Check, Estimator, FigureName, Material, Quantity, Receiver, Requirement, Scene,
+    SceneLight, Simulation,
+};
 use crate::criteria::{self, StopCriteria};
 use crate::error::{Error, Result};
 use crate::input::{direction, required, vec3};
@@ -49,6 +52,7 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
     let geometry = builder.finish()?;
     let lights = lights(raw.lights, origin, base_dir)?;
     let receivers = receivers(raw.receivers, origin)?;
+    let requirements = requirements(raw.requirements, &receivers, origin)?;
 
     let simulation = match raw.simulation {
         Some(value) => simulation(value, origin)?,
@@ -68,6 +72,7 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         geometry,
         lights,
         receivers,
+        requirements,
         simulation,
         camera,
     })
@@ -162,6 +167,69 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
         quantity,
         estimator,
     })
+}
+
+/// The `[[requirements]]` entries, validated against the scene's `receivers`.
+fn requirements(
+    entries: Vec<RequirementFile>,
+    receivers: &[Receiver],
+    origin: &str,
+) -> Result<Vec<Requirement>> {
+    let mut out: Vec<Requirement> = Vec::new();
+    for (i, r) in entries.into_iter().enumerate() {
+        let at = format!("{origin}: requirements[{i}]");
+        let receiver = receivers
+            .iter()
+            .position(|x| x.name == r.receiver)
+            .ok_or_else(|| {
+                Error::input(
+                    format!("{at}.receiver"),
+                    format!("no receiver named `{}`", r.receiver),
+                )
+            })?;
+        let mut checks = Vec::new();
+        for (figure, value) in [
+            (FigureName::Mean, r.em),
+            (FigureName::Min, r.emin),
+            (FigureName::U0, r.u0),
+            (FigureName::G2, r.g2),
+        ] {
+            let Some(at_least) = value else { continue };
+            let ratio = matches!(figure, FigureName::U0 | FigureName::G2);
+            let ok = if ratio {
+                at_least > 0.0 && at_least <= 1.0
+            } else {
+                at_least > 0.0 && at_least <= f64::MAX
+            };
+            if !ok {
+                let range = if ratio { "in (0, 1]" } else { "positive" };
+                return Err(Error::input(
+                    format!("{at}.{}", figure.key()),
+                    format!("must be {range}, got {at_least}"),
+                ));
+            }
+            checks.push(Check { figure, at_least });
+        }
+        if checks.is_empty() {
+            return Err(Error::input(
+                at,
+                "sets no figure to check (em, emin, u0 or g2)",
+            ));
+        }
+        let name = r.name.unwrap_or_else(|| r.receiver.clone());
+        if out.iter().any(|o| o.name == name) {
+            return Err(Error::input(
+                format!("{at}.name"),
+                format!("duplicate requirement name `{name}`"),
+            ));
+        }
+        out.push(Requirement {
+            name,
+            receiver,
+            checks,
+        });
+    }
+    Ok(out)
 }
 
 /// Largest image side: beyond it an image is surely a typo (and a gigabyte of pixels).

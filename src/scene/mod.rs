@@ -297,6 +297,47 @@ impl Receiver {
     }
 }
 
+/// A figure of a receiver a requirement can bound (docs/designers.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FigureName {
+    /// Ē, the mean over the cells.
+    Mean,
+    /// Emin, the least cell.
+    Min,
+    /// Emin/Ē.
+    U0,
+    /// Emin/Emax.
+    G2,
+}
+
+impl FigureName {
+    /// The requirement key, which is also the name the summary gives the check.
+    pub fn key(self) -> &'static str {
+        match self {
+            FigureName::Mean => "em",
+            FigureName::Min => "emin",
+            FigureName::U0 => "u0",
+            FigureName::G2 => "g2",
+        }
+    }
+}
+
+/// One bound of a requirement: `figure` ≥ `at_least`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Check {
+    pub figure: FigureName,
+    pub at_least: f64,
+}
+
+/// A `[[requirements]]` entry, validated: the checks one receiver must pass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Requirement {
+    pub name: String,
+    /// Index into the scene's receivers.
+    pub receiver: usize,
+    pub checks: Vec<Check>,
+}
+
 /// Confidence of the receivers' figures' intervals unless the scene says otherwise.
 pub const DEFAULT_CONFIDENCE: f64 = 0.95;
 
@@ -331,6 +372,8 @@ pub struct Scene {
     pub geometry: Geometry,
     pub lights: Vec<SceneLight>,
     pub receivers: Vec<Receiver>,
+    /// What the receivers' figures must reach (`[[requirements]]`).
+    pub requirements: Vec<Requirement>,
     pub simulation: Simulation,
     /// The `[camera]` of `luxtally render`, if the file has one.
     pub camera: Option<Camera>,

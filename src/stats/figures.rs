@@ -259,7 +259,7 @@ pub fn figures(
 
 /// Each cell's σ as the figures judge it: its own where reliable, widened where not
 /// ([`widened_sigma`]), NaN where unknown.
-fn judged_sigmas(stats: &ReceiverStats) -> Vec<f64> {
+pub(super) fn judged_sigmas(stats: &ReceiverStats) -> Vec<f64> {
     (0..stats.values.len())
         .map(|k| match stats.status[k] {
             CellStatus::Reliable => stats.sigma[k],
@@ -270,19 +270,19 @@ fn judged_sigmas(stats: &ReceiverStats) -> Vec<f64> {
 }
 
 /// A receiver's cell values and their judged σ.
-struct Cells<'a> {
-    values: &'a [f64],
-    sigma: &'a [f64],
+pub(super) struct Cells<'a> {
+    pub values: &'a [f64],
+    pub sigma: &'a [f64],
 }
 
 impl Cells<'_> {
-    fn argmin(&self) -> usize {
+    pub fn argmin(&self) -> usize {
         (0..self.values.len())
             .min_by(|&a, &b| self.values[a].total_cmp(&self.values[b]))
             .unwrap_or(0)
     }
 
-    fn argmax(&self) -> usize {
+    pub fn argmax(&self) -> usize {
         (0..self.values.len())
             .max_by(|&a, &b| self.values[a].total_cmp(&self.values[b]))
             .unwrap_or(0)
@@ -290,7 +290,7 @@ impl Cells<'_> {
 
     /// Emin and Emax with their intervals: `z_one` for the bound one cell decides
     /// (Emin's low, Emax's high), `z_all` for the bound every cell must hold at once.
-    fn extremes(&self, z_one: f64, z_all: f64) -> (Figure, Figure) {
+    pub fn extremes(&self, z_one: f64, z_all: f64) -> (Figure, Figure) {
         let (v, s) = (self.values, self.sigma);
         let low = |z: f64| (0..v.len()).map(move |k| v[k] - z * s[k]);
         let high = |z: f64| (0..v.len()).map(move |k| v[k] + z * s[k]);

@@ -244,6 +244,8 @@ pub enum StopReason {
     Interrupted,
     /// The error target was found unreachable (`--stop-if-unreachable`).
     Unreachable,
+    /// Every requirement's check was decided (`--until decided`).
+    Decided,
 }
 
 impl StopReason {
@@ -255,6 +257,7 @@ impl StopReason {
             StopReason::MinHits => "min_hits",
             StopReason::Interrupted => "interrupted",
             StopReason::Unreachable => "unreachable",
+            StopReason::Decided => "decided",
         }
     }
 }

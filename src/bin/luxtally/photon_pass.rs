@@ -135,6 +135,9 @@ fn print_run(s: &summary::Summary, out: &Path) {
     if let Some(why) = &s.target_unreachable {
         println!("  target unreachable: {why}");
     }
+    if let Some(v) = &s.verdicts {
+        print_verdicts(v);
+    }
     println!(
         "  global: {} triangles, mean {:.4} lx, error {:.2} %",
         s.global.triangles,
@@ -143,6 +146,38 @@ fn print_run(s: &summary::Summary, out: &Path) {
     );
     if s.reliability.bounce_cap_biased {
         println!("  not reliable: {}", bounce_cap_verdict(s));
+    }
+}
+
+/// The overall verdict and one line per check.
+fn print_verdicts(v: &luxtally::stats::verdict::Verdicts) {
+    let word = |o| {
+        serde_json::to_value(o)
+            .ok()
+            .and_then(|x| x.as_str().map(String::from))
+    };
+    println!(
+        "  verdict: {} at {} % confidence over {} checks (anytime-valid bounds)",
+        word(v.overall).unwrap_or_default(),
+        100.0 * v.confidence,
+        v.checks.len()
+    );
+    for c in &v.checks {
+        let expected = c
+            .decision_photons
+            .map(|n| format!(", decided by about {n} photons"))
+            .unwrap_or_default();
+        println!(
+            "    {} {} ≥ {}: {} ({:.4}, bounds {:.4} to {:.4}, margin {:+.1}σ{expected})",
+            c.requirement,
+            c.figure,
+            c.at_least,
+            word(c.outcome).unwrap_or_default(),
+            c.value,
+            c.low,
+            c.high,
+            c.margin_sigma
+        );
     }
 }
 

@@ -267,3 +267,30 @@ fn ctrl_c_stops_at_an_epoch_boundary_with_complete_outputs() {
     );
     assert!(s["receivers"]["desk"]["mean"].as_f64().unwrap() > 0.0);
 }
+
+#[test]
+fn until_decided_needs_requirements() {
+    let dir = temp_dir("until");
+    let scene = dir.join("s.toml");
+    std::fs::write(
+        &scene,
+        "[[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\ncells = [2, 2]\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let args = [
+        "run",
+        scene.to_str().unwrap(),
+        "--until",
+        "decided",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    assert_fails_with(
+        &luxtally(&args),
+        &["--until decided", "no [[requirements]]"],
+    );
+    let mut wrong = args;
+    wrong[3] = "sure";
+    assert_fails_with(&luxtally(&wrong), &["--until"]);
+}

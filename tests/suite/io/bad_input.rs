@@ -413,3 +413,33 @@ fn glb_with_a_bad_vertex_or_index_names_it() {
         assert_has(&m, &["objects[0].file", &format!("bad{k}.glb"), what]);
     }
 }
+
+#[test]
+fn bad_requirements_are_rejected_in_one_line() {
+    let req = |keys: &str| format!("{RECEIVER}[[requirements]]\n{keys}\n");
+    let m = error_of(&req("receiver = \"desk\"\nem = 500"));
+    assert_has(
+        &m,
+        &["requirements[0].receiver", "no receiver named `desk`"],
+    );
+    for bad in ["0", "1.2", "-0.5"] {
+        let m = error_of(&req(&format!("receiver = \"r\"\nu0 = {bad}")));
+        assert_has(&m, &["requirements[0].u0", "in (0, 1]"]);
+    }
+    let m = error_of(&req("receiver = \"r\"\ng2 = 2"));
+    assert_has(&m, &["requirements[0].g2", "in (0, 1]"]);
+    let m = error_of(&req("receiver = \"r\"\nem = -500"));
+    assert_has(&m, &["requirements[0].em", "positive"]);
+    let m = error_of(&req("receiver = \"r\""));
+    assert_has(&m, &["requirements[0]", "sets no figure"]);
+    let m = error_of(&req("receiver = \"r\"\nugr = 19"));
+    assert_has(&m, &["requirements[0]", "ugr"]);
+    let m = error_of(&format!(
+        "{}[[requirements]]\nreceiver = \"r\"\nem = 1\n",
+        req("receiver = \"r\"\nem = 1")
+    ));
+    assert_has(
+        &m,
+        &["requirements[1].name", "duplicate requirement name `r`"],
+    );
+}

@@ -1,0 +1,141 @@
+//! Verdicts on `[[requirements]]` and `--until decided`: the error rate at the threshold
+//! over 200 seeds with the run looking every epoch (anytime validity), UNDECIDED at the
+//! budget there, and an early stop where the margin allows.
+
+use crate::common;
+
+use common::*;
+use luxtally::accel::Backend;
+use luxtally::criteria::Until;
+use luxtally::run::RunOptions;
+use luxtally::scene::Estimator;
+use luxtally::stats::verdict::Outcome;
+
+/// A 1000 cd point source at (0.3, −0.2, 1) over a black floor, a 4 × 4 receiver over
+/// [−0.5, 0.5]², and `requirements` (TOML); the exact Ē and U0.
+fn point_scene(requirements: &str) -> (String, f64, f64) {
+    let toml = format!(
+        r#"{BLACK_FLOOR}
+        [[lights]]
+        type = "point"
+        position = [0.3, -0.2, 1.0]
+        intensity_cd = 1000
+        [[receivers]]
+        name = "r"
+        corner = [-0.5, -0.5, 0.0001]
+        u = [1, 0, 0]
+        v = [0, 1, 0]
+        cells = [4, 4]
+        {requirements}"#
+    );
+    let h = 1.0 - 0.0001;
+    let cells: Vec<f64> = (0..16)
+        .map(|k| {
+            let (x0, y0) = (
+                -0.5 + (k % 4) as f64 * 0.25 - 0.3,
+                -0.5 + (k / 4) as f64 * 0.25 + 0.2,
+            );
+            point_source_cell_lx(1000.0, h, x0, x0 + 0.25, y0, y0 + 0.25)
+        })
+        .collect();
+    let mean = cells.iter().sum::<f64>() / 16.0;
+    let min = cells.iter().copied().fold(f64::INFINITY, f64::min);
+    (toml, mean, min / mean)
+}
+
+fn until_decided(scene: &luxtally::scene::Scene, photons: u64, seed: u64) -> RunOptions {
+    let mut o = RunOptions {
+        estimator: Some(Estimator::Track),
+        seed,
+        ..options(scene, photons, 2, Backend::Embree)
+    };
+    o.stop.until = Some(Until::Decided);
+    o
+}
+
+/// Thresholds on the exact Ē and U0: either verdict would be an error of one sign, so
+/// each check may be decided (either way) in at most its 2 × 2.5 % of the runs, within
+/// 3 binomial σ, although the run looks at the bounds after every epoch; most runs end
+/// UNDECIDED at their budget.
+#[test]
+fn at_the_threshold_verdicts_err_at_most_at_their_rate_and_end_undecided() {
+    let (_, mean, u0) = point_scene("");
+    let (toml, _, _) = point_scene(&format!(
+        "[[requirements]]\nreceiver = \"r\"\nem = {mean}\nu0 = {u0}\n"
+    ));
+    let scene = scene(&toml);
+    let seeds = 200;
+    let (mut decided, mut undecided_at_budget) = ([0u32; 2], 0);
+    for seed in 1..=seeds {
+        let s = run_options(&scene, &until_decided(&scene, 300_000, seed));
+        let v = s.verdicts.expect("verdicts");
+        assert_eq!(v.checks.len(), 2);
+        for (k, c) in v.checks.iter().enumerate() {
+            decided[k] += (c.outcome != Outcome::Undecided) as u32;
+        }
+        if v.overall == Outcome::Undecided && s.stop_reason.as_deref() == Some("photons") {
+            undecided_at_budget += 1;
+        }
+    }
+    // Per check 1 − 0.95 split over 2 checks, one-sided each way: 2.5 % per sign.
+    let rate = 0.05;
+    let allowed = seeds as f64 * rate + 3.0 * (seeds as f64 * rate * (1.0 - rate)).sqrt();
+    eprintln!("decided {decided:?} of {seeds}; undecided at the budget {undecided_at_budget}");
+    for (k, &n) in decided.iter().enumerate() {
+        assert!(
+            (n as f64) <= allowed,
+            "check {k} decided in {n} of {seeds} runs at its threshold"
+        );
+    }
+    assert!(
+        undecided_at_budget >= seeds * 8 / 10,
+        "{undecided_at_budget}"
+    );
+}
+
+/// With a clear margin (Ē 20 % above the requirement) `--until decided` stops PASS long
+/// before a 1 % error target would.
+#[test]
+fn until_decided_stops_early_where_the_margin_allows() {
+    let (_, mean, _) = point_scene("");
+    let (toml, _, _) = point_scene(&format!(
+        "[[requirements]]\nname = \"task\"\nreceiver = \"r\"\nem = {}\n",
+        0.8 * mean
+    ));
+    let scene = scene(&toml);
+    let s = run_options(&scene, &until_decided(&scene, 100_000_000, 1));
+    let v = s.verdicts.expect("verdicts");
+    assert_eq!(
+        (v.overall, s.stop_reason.as_deref()),
+        (Outcome::Pass, Some("decided"))
+    );
+    assert!(v.checks[0].low >= 0.8 * mean && v.checks[0].decision_photons.is_none());
+    let mut one_percent = options(&scene, 100_000_000, 2, Backend::Embree);
+    one_percent.estimator = Some(Estimator::Track);
+    one_percent.stop.target_error = Some(0.01);
+    one_percent.stop.target = Some("receiver:r".into());
+    let t = run_options(&scene, &one_percent);
+    assert!(
+        s.photons_emitted * 4 < t.photons_emitted,
+        "decided after {} photons, 1 % after {}",
+        s.photons_emitted,
+        t.photons_emitted
+    );
+}
+
+/// A clear failure (Ē asked 50 % above the truth) is FAIL, and the overall verdict too.
+#[test]
+fn a_clear_shortfall_fails() {
+    let (_, mean, _) = point_scene("");
+    let (toml, _, _) = point_scene(&format!(
+        "[[requirements]]\nreceiver = \"r\"\nem = {}\nu0 = 0.1\n",
+        1.5 * mean
+    ));
+    let scene = scene(&toml);
+    let s = run_options(&scene, &until_decided(&scene, 10_000_000, 3));
+    let v = s.verdicts.expect("verdicts");
+    assert_eq!(v.checks[0].outcome, Outcome::Fail);
+    assert_eq!(v.checks[1].outcome, Outcome::Pass);
+    assert_eq!(v.overall, Outcome::Fail);
+    assert!(v.checks[0].margin_sigma < -3.0);
+}
