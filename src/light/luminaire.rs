@@ -24,6 +24,8 @@ pub struct LuminaireFile {
     pub rotate_deg: Option<f64>,
     pub multiplier: Option<f64>,
     pub flux_lm: Option<f64>,
+    /// CIE 97 maintenance factor (default: the scene's `maintenance_factor`, else 1).
+    pub maintenance_factor: Option<MaintenanceFile>,
 }
 
 impl LightFile for LuminaireFile {
@@ -72,6 +74,10 @@ impl LightFile for LuminaireFile {
             }
             _ => 1.0,
         };
+        let maintenance_factor = match &self.maintenance_factor {
+            Some(m) => m.factor(&format!("{at}.maintenance_factor"))?,
+            None => cx.maintenance_factor,
+        };
         let frame = Luminaire::frame(aim, self.rotate_deg.unwrap_or(0.0));
         Ok(positions
             .into_iter()
@@ -80,7 +86,8 @@ impl LightFile for LuminaireFile {
                     photometry: photometry.clone(),
                     position,
                     frame,
-                    scale: multiplier * rescale * tilt,
+                    scale: multiplier * rescale * tilt * maintenance_factor,
+                    maintenance_factor,
                 });
                 (label, light)
             })
@@ -98,8 +105,54 @@ pub struct Luminaire {
     /// Luminaire frame (x = C0, y = C90, z = up, nadir −z) → world.
     pub frame: DMat3,
     /// Factor on the file's intensities: `multiplier`, times the `flux_lm` rescaling,
-    /// times the file's tilt factor at the luminaire's tilt (relative to tilt 0).
+    /// times the file's tilt factor at the luminaire's tilt (relative to tilt 0), times
+    /// the maintenance factor.
     pub scale: f64,
+    /// The maintenance factor in `scale` (it prints through `scale` alone).
+    pub maintenance_factor: f64,
+}
+
+/// `maintenance_factor = 0.8`, or its CIE 97:2005 parts `{llmf, lsf, lmf, rsmf}` (each
+/// 1 unless given), whose product it is.
+#[derive(serde::Deserialize, Debug, Clone, Copy, PartialEq)]
+#[serde(untagged, expecting = "a number or a table of llmf, lsf, lmf, rsmf")]
+pub enum MaintenanceFile {
+    Factor(f64),
+    Parts {
+        llmf: Option<f64>,
+        lsf: Option<f64>,
+        lmf: Option<f64>,
+        rsmf: Option<f64>,
+    },
+}
+
+impl MaintenanceFile {
+    /// The factor, each part in (0, 1]; `at` names the key in messages.
+    pub fn factor(&self, at: &str) -> Result<f64> {
+        let parts = match *self {
+            MaintenanceFile::Factor(f) => vec![("", f)],
+            MaintenanceFile::Parts {
+                llmf,
+                lsf,
+                lmf,
+                rsmf,
+            } => [(".llmf", llmf), (".lsf", lsf), (".lmf", lmf), (".rsmf", rsmf)]
+                .into_iter()
+                .map(|(k, v)| (k, v.unwrap_or(1.0)))
+                .collect(),
+        };
+        let mut product = 1.0;
+        for (key, f) in parts {
+            if !(f > 0.0 && f <= 1.0) {
+                return Err(Error::input(
+                    format!("{at}{key}"),
+                    format!("must be in (0, 1] (a maintenance factor), got {f}"),
+                ));
+            }
+            product *= f;
+        }
+        Ok(product)
+    }
 }
 
 /// Printed as `Luminaire(Luminaire { .. })`: the print is part of the scene fingerprint
@@ -173,6 +226,10 @@ impl Light for Luminaire {
 
     fn photometry(&self) -> Option<&Arc<Photometry>> {
         Some(&self.photometry)
+    }
+
+    fn maintenance_factor(&self) -> f64 {
+        self.maintenance_factor
     }
 }
 

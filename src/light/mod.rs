@@ -33,7 +33,7 @@ use std::sync::Arc;
 
 pub use area::Area;
 pub use directional::Directional;
-pub use luminaire::Luminaire;
+pub use luminaire::{Luminaire, MaintenanceFile};
 pub use point::Point;
 pub use spot::{spot_profile, Spot};
 
@@ -77,6 +77,11 @@ pub trait Light: Debug + Send + Sync + Any {
     /// The photometric file it emits by, if any (summary.json lists each once).
     fn photometry(&self) -> Option<&Arc<Photometry>> {
         None
+    }
+
+    /// The maintenance factor its flux carries (luminaires: docs/scene.md).
+    fn maintenance_factor(&self) -> f64 {
+        1.0
     }
 }
 
@@ -166,6 +171,8 @@ pub fn single(label: &str, light: impl Light) -> Result<Vec<Labelled>> {
 pub struct LoadContext<'a> {
     pub base_dir: &'a Path,
     photometry: Vec<(PathBuf, Arc<Photometry>)>,
+    /// The scene's `maintenance_factor`: luminaires without their own take it.
+    pub maintenance_factor: f64,
 }
 
 impl<'a> LoadContext<'a> {
@@ -173,6 +180,7 @@ impl<'a> LoadContext<'a> {
         LoadContext {
             base_dir,
             photometry: Vec::new(),
+            maintenance_factor: 1.0,
         }
     }
 

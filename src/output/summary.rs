@@ -88,8 +88,12 @@ pub struct Summary {
 #[serde(default)]
 pub struct LightSummary {
     pub label: String,
+    /// Maintained flux: the maintenance factor applied.
     #[serde(deserialize_with = "null_as_nan::f64")]
     pub flux_lm: f64,
+    /// The maintenance factor in `flux_lm` (1 for lights without one).
+    #[serde(deserialize_with = "null_as_nan::f64")]
+    pub maintenance_factor: f64,
 }
 
 /// A photometric file the scene's luminaires use (once per file).
@@ -261,6 +265,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
             .map(|(l, f)| LightSummary {
                 label: l.label.clone(),
                 flux_lm: *f,
+                maintenance_factor: l.kind.maintenance_factor(),
             })
             .collect(),
         luminaires: luminaires(scene),

@@ -26,6 +26,8 @@ pub struct SceneFile {
     pub lights: Vec<toml::Value>,
     #[serde(default)]
     pub receivers: Vec<ReceiverFile>,
+    /// The maintenance factor of every luminaire without its own.
+    pub maintenance_factor: Option<crate::light::MaintenanceFile>,
     #[serde(default)]
     pub requirements: Vec<RequirementFile>,
     pub simulation: Option<toml::Value>,

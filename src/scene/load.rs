@@ -50,7 +50,11 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         load_object(&entry, i, origin, base_dir, &mut materials, &mut builder)?;
     }
     let geometry = builder.finish()?;
-    let lights = lights(raw.lights, origin, base_dir)?;
+    let maintenance_factor = match &raw.maintenance_factor {
+        Some(m) => m.factor(&at("maintenance_factor"))?,
+        None => 1.0,
+    };
+    let lights = lights(raw.lights, origin, base_dir, maintenance_factor)?;
     let receivers = receivers(raw.receivers, origin)?;
     let requirements = requirements(raw.requirements, &receivers, origin)?;
 
@@ -79,9 +83,15 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
 }
 
 /// The `[[lights]]` entries, each read by its kind (`crate::light`).
-fn lights(entries: Vec<toml::Value>, origin: &str, base_dir: &Path) -> Result<Vec<SceneLight>> {
+fn lights(
+    entries: Vec<toml::Value>,
+    origin: &str,
+    base_dir: &Path,
+    maintenance_factor: f64,
+) -> Result<Vec<SceneLight>> {
     let mut lights = Vec::new();
     let mut cx = LoadContext::new(base_dir);
+    cx.maintenance_factor = maintenance_factor;
     for (i, value) in entries.into_iter().enumerate() {
         let label = format!("lights[{i}]");
         for (label, kind) in light::load_entry(value, &label, origin, &mut cx)? {

@@ -338,3 +338,60 @@ fn a_tilted_luminaire_takes_its_files_tilt_factor() {
         );
     }
 }
+
+/// A maintenance factor scales a luminaire's flux and every value it gives: its own
+/// (a number, or the product of CIE 97's parts) over the scene's, which applies to the
+/// luminaires without one; the summary says which each light carries.
+#[test]
+fn maintenance_factors_give_maintained_values() {
+    let file = data("cosine.ies");
+    let p = photometry_of("cosine.ies");
+    let initial = run_scene(&over_black_plane(&file, ""), 20_000);
+    let own = run_scene(
+        &over_black_plane(&file, "maintenance_factor = {llmf = 0.9, lmf = 0.8}"),
+        20_000,
+    );
+    let scene_wide = run_scene(
+        &format!("maintenance_factor = 0.72\n{}", over_black_plane(&file, "")),
+        20_000,
+    );
+    for s in [&own, &scene_wide] {
+        assert!((s.total_flux_lm - 0.72 * p.flux_lm()).abs() < 1e-9 * p.flux_lm());
+        assert!((s.lights[0].maintenance_factor - 0.72).abs() < 1e-15);
+        assert_matches(
+            &s.receivers["floor"],
+            point_luminaire_exact(&p, 0.72),
+            "maintained",
+        );
+    }
+    assert_eq!(initial.lights[0].maintenance_factor, 1.0);
+    for (a, b) in initial.receivers["floor"]
+        .values
+        .iter()
+        .zip(&own.receivers["floor"].values)
+    {
+        assert!((0.72 * a - b).abs() <= 1e-12 * a.abs(), "{a} × 0.72 ≠ {b}");
+    }
+    let bad = |extra: &str| {
+        let text = over_black_plane(&file, extra);
+        luxtally::scene::load_str(&text, Path::new("."), "test.toml")
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default()
+    };
+    assert!(
+        bad("maintenance_factor = 1.2").contains("lights[0].maintenance_factor: must be in (0, 1]")
+    );
+    assert!(bad("maintenance_factor = {lsf = 0}").contains("lights[0].maintenance_factor.lsf"));
+    assert!(bad("maintenance_factor = \"high\"").contains("lights[0].maintenance_factor"));
+    let scene_wide = luxtally::scene::load_str(
+        &format!("maintenance_factor = 0\n{}", over_black_plane(&file, "")),
+        Path::new("."),
+        "test.toml",
+    );
+    let message = scene_wide.err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(
+        message.contains("test.toml: maintenance_factor: must be in (0, 1]"),
+        "{message}"
+    );
+}
