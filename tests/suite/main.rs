@@ -61,6 +61,7 @@ mod distributed {
 }
 
 mod project {
+    mod bundled_scenes;
     mod layering;
     mod setup_script;
 }
