@@ -139,3 +139,28 @@ fn a_clear_shortfall_fails() {
     assert_eq!(v.overall, Outcome::Fail);
     assert!(v.checks[0].margin_sigma < -3.0);
 }
+
+/// The bundled EN 12464-1 office (tasks, surrounding, walls, ceiling) passes every check,
+/// decided long before its 10⁷-photon budget.
+#[test]
+fn the_bundled_en12464_office_is_decided_pass() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/en12464_office.toml");
+    let scene = luxtally::scene::load(&path).expect("loads");
+    let mut o = options(&scene, 10_000_000, 2, Backend::Embree);
+    o.stop.until = Some(Until::Decided);
+    let s = run_options(&scene, &o);
+    let v = s.verdicts.expect("verdicts");
+    assert_eq!(
+        v.checks.len(),
+        scene
+            .requirements
+            .iter()
+            .map(|r| r.checks.len())
+            .sum::<usize>()
+    );
+    assert_eq!(
+        (v.overall, s.stop_reason.as_deref()),
+        (Outcome::Pass, Some("decided"))
+    );
+    assert!(s.photons_emitted < 2_000_000, "{}", s.photons_emitted);
+}
