@@ -80,7 +80,8 @@ pub struct Summary {
     /// or the forecast is beyond the photon or time budget (`--stop-if-unreachable` ends
     /// the run then); null while it may be met, and without a target.
     pub target_unreachable: Option<String>,
-    /// The verdicts on the scene's `[[requirements]]` (null without any).
+    /// The verdicts on the scene's `[[requirements]]` (absent without any).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub verdicts: Option<Verdicts>,
 }
 

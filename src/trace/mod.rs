@@ -492,6 +492,7 @@ fn fold_histories(
 
 /// One history's score `x` (from `hits` scores) for `cell`, in the scratch `acc`; a
 /// cell's first history lists it in `out`.
+#[inline]
 fn add_history(
     acc: &mut Vec<CellPartial>,
     out: &mut Vec<CellPartial>,
