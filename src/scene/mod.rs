@@ -12,6 +12,7 @@ use std::sync::Arc;
 pub mod adjacency;
 pub mod file;
 pub mod fingerprint;
+pub mod grid;
 mod instance;
 mod load;
 pub mod mesh_io;
