@@ -3,6 +3,7 @@
 //! the key path, `objects[2].radius`, through `serde_path_to_error`). Nothing here checks
 //! physics; `load` validates and converts.
 
+use super::grid::GridRounding;
 use super::shapes;
 use super::Estimator;
 use crate::error::{Error, Result};
@@ -274,11 +275,22 @@ pub struct ReceiverFile {
     pub corner: Coords,
     pub u: Coords,
     pub v: Coords,
-    pub cells: [u32; 2],
+    /// Exactly one of `cells` and `grid`.
+    pub cells: Option<[u32; 2]>,
+    pub grid: Option<GridName>,
+    pub grid_band_m: Option<Length>,
+    pub grid_rounding: Option<GridRounding>,
     pub quantity: Option<QuantityName>,
     pub view_direction: Option<[f64; 3]>,
     pub half_angle_deg: Option<f64>,
     pub estimator: Option<Estimator>,
+}
+
+/// `grid = "en12464"`: the receiver's cells by the EN 12464-1 rule (`scene::grid`).
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GridName {
+    #[serde(rename = "en12464")]
+    En12464,
 }
 
 /// `quantity = "illuminance" | "luminance"`; a luminance meter's keys come with it.

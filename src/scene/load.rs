@@ -5,7 +5,8 @@
 // `!(x > 0.0)` is deliberate: it also rejects NaN (e.g. from an overflowing cross product).
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::file::{self, CameraFile, QuantityName, ReceiverFile, RequirementFile};
+use super::file::{self, CameraFile, GridName, QuantityName, ReceiverFile, RequirementFile};
+use super::grid::{self, GridError, GridRule};
 use super::objects::{load_object, GeometryBuilder};
 use super::{
     Camera, Check, Estimator, FigureName, Material, Quantity, Receiver, Requirement, Scene,
@@ -15,6 +16,7 @@ use crate::criteria::{self, StopCriteria};
 use crate::error::{Error, Result};
 use crate::input::{direction, required, vec3};
 use crate::light::{self, LoadContext};
+use glam::DVec3;
 use std::path::{Path, PathBuf};
 
 /// Loads and validates the scene file at `path`; relative mesh paths resolve against its
@@ -116,12 +118,7 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
     if !(u.cross(v).length() > 0.0) {
         return Err(Error::input(at, "zero-area receiver: u × v = 0"));
     }
-    if r.cells[0] == 0 || r.cells[1] == 0 {
-        return Err(Error::input(
-            format!("{at}.cells"),
-            format!("zero cells: {:?} (each must be ≥ 1)", r.cells),
-        ));
-    }
+    let (corner, u, v, cells, grid) = receiver_cells(&r, corner, u, v, at)?;
     let quantity = match r.quantity.unwrap_or(QuantityName::Illuminance) {
         QuantityName::Illuminance => {
             if r.view_direction.is_some() || r.half_angle_deg.is_some() {
@@ -163,9 +160,10 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
         corner,
         u,
         v,
-        cells: r.cells,
+        cells,
         quantity,
         estimator,
+        grid,
     })
 }
 
@@ -230,6 +228,68 @@ fn requirements(
         });
     }
     Ok(out)
+}
+
+/// A receiver's area and cells: `cells = [nu, nv]` as given, or `grid = "en12464"`
+/// (the rule of `scene::grid`, after its `grid_band_m` edge band, rounded as
+/// `grid_rounding` says). Exactly one of `cells` and `grid`.
+#[allow(clippy::type_complexity)]
+fn receiver_cells(
+    r: &ReceiverFile,
+    corner: DVec3,
+    u: DVec3,
+    v: DVec3,
+    at: &str,
+) -> Result<(DVec3, DVec3, DVec3, [u32; 2], Option<GridRule>)> {
+    let key = |k: &str| format!("{at}.{k}");
+    match (r.cells, r.grid) {
+        (Some(_), Some(_)) => Err(Error::input(
+            key("grid"),
+            "give either cells = [nu, nv] or grid = \"en12464\", not both",
+        )),
+        (None, None) => Err(Error::input(
+            key("cells"),
+            "missing (give cells = [nu, nv] or grid = \"en12464\")",
+        )),
+        (Some(cells), None) => {
+            for (k, given) in [
+                ("grid_band_m", r.grid_band_m.is_some()),
+                ("grid_rounding", r.grid_rounding.is_some()),
+            ] {
+                if given {
+                    return Err(Error::input(key(k), "applies only to grid = \"en12464\""));
+                }
+            }
+            if cells[0] == 0 || cells[1] == 0 {
+                return Err(Error::input(
+                    key("cells"),
+                    format!("zero cells: {cells:?} (each must be ≥ 1)"),
+                ));
+            }
+            Ok((corner, u, v, cells, None))
+        }
+        (None, Some(GridName::En12464)) => {
+            let band_m = r.grid_band_m.map_or(grid::DEFAULT_BAND_M, |b| b.0);
+            if !(band_m >= 0.0) {
+                return Err(Error::input(
+                    key("grid_band_m"),
+                    format!("must be ≥ 0, got {band_m}"),
+                ));
+            }
+            let rule = GridRule {
+                band_m,
+                rounding: r.grid_rounding.unwrap_or_default(),
+            };
+            let g = rule.apply(corner, u, v).map_err(|e| {
+                let k = match e {
+                    GridError::BandTooWide { .. } => "grid_band_m",
+                    GridError::TooManyPoints { .. } => "grid",
+                };
+                Error::input(key(k), e.to_string())
+            })?;
+            Ok((g.corner, g.u, g.v, g.cells, Some(rule)))
+        }
+    }
 }
 
 /// Largest image side: beyond it an image is surely a typo (and a gigabyte of pixels).

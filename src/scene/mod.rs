@@ -285,6 +285,10 @@ pub struct Receiver {
     pub cells: [u32; 2],
     pub quantity: Quantity,
     pub estimator: Estimator,
+    /// `Some` when the cells (and the area, after its edge band) were made by the
+    /// EN 12464-1 rule (`grid = "en12464"`, [`grid`]); corner, u, v and cells above are
+    /// then the rule's result.
+    pub grid: Option<grid::GridRule>,
 }
 
 impl Receiver {

@@ -154,6 +154,7 @@ mod tests {
             cells: [4, 2],
             quantity: Quantity::Illuminance,
             estimator: Estimator::Track,
+            grid: None,
         }
     }
 

@@ -185,6 +185,7 @@ mod tests {
             cells: [64, 32],
             quantity: Quantity::Illuminance,
             estimator: Estimator::Track,
+            grid: None,
         };
         let grid = ReceiverGrid::new(&desk, DVec3::ZERO, 0, Estimator::Track);
         let mut rng = crate::rng::aux_stream(11);

@@ -42,6 +42,7 @@ mod engine {
 
 mod io {
     mod bad_input;
+    mod calculation_grid;
     mod f32_range;
     mod fuzz;
     mod outputs;
