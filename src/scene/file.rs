@@ -283,6 +283,7 @@ pub struct ReceiverFile {
     pub quantity: Option<QuantityName>,
     pub view_direction: Option<[f64; 3]>,
     pub half_angle_deg: Option<f64>,
+    pub facing: Option<[f64; 3]>,
     pub estimator: Option<Estimator>,
 }
 
@@ -293,12 +294,15 @@ pub enum GridName {
     En12464,
 }
 
-/// `quantity = "illuminance" | "luminance"`; a luminance meter's keys come with it.
+/// `quantity = "illuminance" | "luminance" | "cylindrical" | "semi_cylindrical"`; a
+/// luminance meter's keys and a semi-cylinder's `facing` come with theirs.
 #[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum QuantityName {
     Illuminance,
     Luminance,
+    Cylindrical,
+    SemiCylindrical,
 }
 
 /// The `[camera]` table: the eye of `luxtally render`.

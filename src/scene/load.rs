@@ -119,21 +119,53 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
         return Err(Error::input(at, "zero-area receiver: u × v = 0"));
     }
     let (corner, u, v, cells, grid) = receiver_cells(&r, corner, u, v, at)?;
-    let quantity = match r.quantity.unwrap_or(QuantityName::Illuminance) {
-        QuantityName::Illuminance => {
-            if r.view_direction.is_some() || r.half_angle_deg.is_some() {
-                let key = if r.view_direction.is_some() {
-                    "view_direction"
-                } else {
-                    "half_angle_deg"
-                };
-                return Err(Error::input(
-                    format!("{at}.{key}"),
-                    "applies only to quantity = \"luminance\"",
-                ));
-            }
-            Quantity::Illuminance
+    let quantity = receiver_quantity(&r, at)?;
+    let estimator = r.estimator.unwrap_or(Estimator::Auto);
+    Ok(Receiver {
+        name: r.name,
+        corner,
+        u,
+        v,
+        cells,
+        quantity,
+        estimator,
+        grid,
+    })
+}
+
+/// What a receiver measures, with the keys of its quantity (a luminance meter's
+/// `view_direction` and `half_angle_deg`, a semi-cylinder's `facing`); another
+/// quantity's keys are errors.
+fn receiver_quantity(r: &ReceiverFile, at: &str) -> Result<Quantity> {
+    let name = r.quantity.unwrap_or(QuantityName::Illuminance);
+    let keys = [
+        (
+            "view_direction",
+            r.view_direction.is_some(),
+            QuantityName::Luminance,
+        ),
+        (
+            "half_angle_deg",
+            r.half_angle_deg.is_some(),
+            QuantityName::Luminance,
+        ),
+        ("facing", r.facing.is_some(), QuantityName::SemiCylindrical),
+    ];
+    for (key, given, owner) in keys {
+        if given && name != owner {
+            let owner = match owner {
+                QuantityName::Luminance => "luminance",
+                _ => "semi_cylindrical",
+            };
+            return Err(Error::input(
+                format!("{at}.{key}"),
+                format!("applies only to quantity = \"{owner}\""),
+            ));
         }
+    }
+    Ok(match name {
+        QuantityName::Illuminance => Quantity::Illuminance,
+        QuantityName::Cylindrical => Quantity::Cylindrical,
         QuantityName::Luminance => {
             let what = "quantity = \"luminance\"";
             let view_direction = direction(
@@ -153,19 +185,28 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
                 half_angle_deg,
             }
         }
-    };
-    let estimator = r.estimator.unwrap_or(Estimator::Auto);
-    Ok(Receiver {
-        name: r.name,
-        corner,
-        u,
-        v,
-        cells,
-        quantity,
-        estimator,
-        grid,
+        QuantityName::SemiCylindrical => {
+            let what = "quantity = \"semi_cylindrical\"";
+            let f = direction(required(r.facing, at, "facing", what)?, at, "facing")?;
+            if !(f.z.abs() <= FACING_SLACK) {
+                return Err(Error::input(
+                    format!("{at}.facing"),
+                    format!(
+                        "must be horizontal (z = 0 within {FACING_SLACK:e} once normalised): \
+                         the semi-cylinder stands upright; got z = {:.6}",
+                        f.z
+                    ),
+                ));
+            }
+            Quantity::SemiCylindrical {
+                facing: DVec3::new(f.x, f.y, 0.0).normalize(),
+            }
+        }
     })
 }
+
+/// How far from horizontal (z of the normalised vector) a semi-cylinder's `facing` may be.
+const FACING_SLACK: f64 = 1e-6;
 
 /// The `[[requirements]]` entries, validated against the scene's `receivers`.
 fn requirements(
