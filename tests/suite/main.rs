@@ -23,6 +23,7 @@ mod physics {
     mod bounce_cap;
     mod calibration;
     mod custom_light;
+    mod cylindrical;
     mod direct_light;
     mod extremes;
     mod figures;

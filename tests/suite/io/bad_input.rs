@@ -335,6 +335,77 @@ fn bad_receiver_and_simulation_parameters_are_rejected() {
     assert_has(&m, &["simulation.time_limit"]);
 }
 
+#[test]
+fn bad_cylindrical_receivers_are_rejected() {
+    let semi = format!("{RECEIVER}quantity = \"semi_cylindrical\"\n");
+    let m = error_of(&semi);
+    assert_has(&m, &["receivers[0].facing", "missing", "semi_cylindrical"]);
+    let m = error_of(&format!("{semi}facing = [0, 0, 1]\n"));
+    assert_has(&m, &["receivers[0].facing", "horizontal"]);
+    let m = error_of(&format!("{semi}facing = [1, 0, 0.01]\n"));
+    assert_has(&m, &["receivers[0].facing", "horizontal"]);
+    let m = error_of(&format!("{semi}facing = [0, 0, 0]\n"));
+    assert_has(&m, &["receivers[0].facing", "zero direction"]);
+    let m = error_of(&format!(
+        "{semi}facing = [1, 0, 0]\nview_direction = [0, 0, -1]\n"
+    ));
+    assert_has(
+        &m,
+        &[
+            "receivers[0].view_direction",
+            "only to quantity = \"luminance\"",
+        ],
+    );
+    let cylinder = format!("{RECEIVER}quantity = \"cylindrical\"\n");
+    let m = error_of(&format!("{cylinder}facing = [1, 0, 0]\n"));
+    assert_has(
+        &m,
+        &[
+            "receivers[0].facing",
+            "only to quantity = \"semi_cylindrical\"",
+        ],
+    );
+    let m = error_of(&format!("{cylinder}view_direction = [0, 0, -1]\n"));
+    assert_has(
+        &m,
+        &[
+            "receivers[0].view_direction",
+            "only to quantity = \"luminance\"",
+        ],
+    );
+    let m = error_of(&format!("{cylinder}half_angle_deg = 10\n"));
+    assert_has(
+        &m,
+        &[
+            "receivers[0].half_angle_deg",
+            "only to quantity = \"luminance\"",
+        ],
+    );
+    let m = error_of(&format!("{RECEIVER}facing = [1, 0, 0]\n"));
+    assert_has(
+        &m,
+        &[
+            "receivers[0].facing",
+            "only to quantity = \"semi_cylindrical\"",
+        ],
+    );
+    let m = error_of(&format!(
+        "{RECEIVER}quantity = \"luminance\"\nview_direction = [0, 0, -1]\nhalf_angle_deg = 5\nfacing = [1, 0, 0]\n"
+    ));
+    assert_has(
+        &m,
+        &[
+            "receivers[0].facing",
+            "only to quantity = \"semi_cylindrical\"",
+        ],
+    );
+    let m = error_of(&format!("{RECEIVER}quantity = \"spherical\"\n"));
+    assert_has(
+        &m,
+        &["receivers[0].quantity", "cylindrical", "semi_cylindrical"],
+    );
+}
+
 /// A receiver without `cells`, for the `grid` keys.
 const GRID_RECEIVER: &str =
     "[[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [3, 0, 0]\nv = [0, 2, 0]\n";
