@@ -64,7 +64,9 @@ impl ReceiverGrid {
     /// illuminance receiver the test is one straight pass over the batch doing
     /// `crossing`'s arithmetic, in its order, for every segment (no early exit to
     /// mispredict, and the compiler can use vector instructions), so the marks are exact;
-    /// callers then call `crossing` on the few marked segments.
+    /// callers then call `crossing` on the few marked segments. The other quantities
+    /// (a luminance meter's cone, the cylinders' two faces) call `crossing` on every
+    /// segment, so their marks are exact too.
     pub fn mark_crossings(
         &self,
         o: [&[f32]; 3],
