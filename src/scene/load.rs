@@ -6,7 +6,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use super::file::{self, CameraFile, GridName, QuantityName, ReceiverFile, RequirementFile};
-use super::grid::{self, GridError, GridRule};
+use super::grid::{self, Grid, GridError, GridRule};
 use super::objects::{load_object, GeometryBuilder};
 use super::{
     Camera, Check, Estimator, FigureName, Material, Quantity, Receiver, Requirement, Scene,
@@ -118,15 +118,15 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
     if !(u.cross(v).length() > 0.0) {
         return Err(Error::input(at, "zero-area receiver: u × v = 0"));
     }
-    let (corner, u, v, cells, grid) = receiver_cells(&r, corner, u, v, at)?;
+    let (area, grid) = receiver_cells(&r, corner, u, v, at)?;
     let quantity = receiver_quantity(&r, at)?;
     let estimator = r.estimator.unwrap_or(Estimator::Auto);
     Ok(Receiver {
         name: r.name,
-        corner,
-        u,
-        v,
-        cells,
+        corner: area.corner,
+        u: area.u,
+        v: area.v,
+        cells: area.cells,
         quantity,
         estimator,
         grid,
@@ -274,14 +274,13 @@ fn requirements(
 /// A receiver's area and cells: `cells = [nu, nv]` as given, or `grid = "en12464"`
 /// (the rule of `scene::grid`, after its `grid_band_m` edge band, rounded as
 /// `grid_rounding` says). Exactly one of `cells` and `grid`.
-#[allow(clippy::type_complexity)]
 fn receiver_cells(
     r: &ReceiverFile,
     corner: DVec3,
     u: DVec3,
     v: DVec3,
     at: &str,
-) -> Result<(DVec3, DVec3, DVec3, [u32; 2], Option<GridRule>)> {
+) -> Result<(Grid, Option<GridRule>)> {
     let key = |k: &str| format!("{at}.{k}");
     match (r.cells, r.grid) {
         (Some(_), Some(_)) => Err(Error::input(
@@ -307,7 +306,15 @@ fn receiver_cells(
                     format!("zero cells: {cells:?} (each must be ≥ 1)"),
                 ));
             }
-            Ok((corner, u, v, cells, None))
+            Ok((
+                Grid {
+                    corner,
+                    u,
+                    v,
+                    cells,
+                },
+                None,
+            ))
         }
         (None, Some(GridName::En12464)) => {
             let band_m = r.grid_band_m.map_or(grid::DEFAULT_BAND_M, |b| b.0);
@@ -328,7 +335,7 @@ fn receiver_cells(
                 };
                 Error::input(key(k), e.to_string())
             })?;
-            Ok((g.corner, g.u, g.v, g.cells, Some(rule)))
+            Ok((g, Some(rule)))
         }
     }
 }
