@@ -3,7 +3,7 @@
 //! as null (NaN: an unknown error) read back as NaN.
 
 use crate::run::RunState;
-use crate::scene::{Estimator, Quantity};
+use crate::scene::Estimator;
 use crate::stats::figures::{self, Figures};
 use crate::stats::forecast::HistoryPoint;
 use crate::stats::null_as_nan;
@@ -329,10 +329,7 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
         mean_vov,
         state.scene.simulation.confidence,
     );
-    let (quantity, unit) = match r.quantity {
-        Quantity::Illuminance => ("illuminance", "lx"),
-        Quantity::Luminance { .. } => ("luminance", "cd/m2"),
-    };
+    let (quantity, unit) = (r.quantity.name(), r.quantity.unit());
     ReceiverSummary {
         quantity: quantity.into(),
         unit: unit.into(),

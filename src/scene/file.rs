@@ -3,6 +3,7 @@
 //! the key path, `objects[2].radius`, through `serde_path_to_error`). Nothing here checks
 //! physics; `load` validates and converts.
 
+use super::grid::GridRounding;
 use super::shapes;
 use super::Estimator;
 use crate::error::{Error, Result};
@@ -276,19 +277,34 @@ pub struct ReceiverFile {
     pub corner: Coords,
     pub u: Coords,
     pub v: Coords,
-    pub cells: [u32; 2],
+    /// Exactly one of `cells` and `grid`.
+    pub cells: Option<[u32; 2]>,
+    pub grid: Option<GridName>,
+    pub grid_band_m: Option<Length>,
+    pub grid_rounding: Option<GridRounding>,
     pub quantity: Option<QuantityName>,
     pub view_direction: Option<[f64; 3]>,
     pub half_angle_deg: Option<f64>,
+    pub facing: Option<[f64; 3]>,
     pub estimator: Option<Estimator>,
 }
 
-/// `quantity = "illuminance" | "luminance"`; a luminance meter's keys come with it.
+/// `grid = "en12464"`: the receiver's cells by the EN 12464-1 rule (`scene::grid`).
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GridName {
+    #[serde(rename = "en12464")]
+    En12464,
+}
+
+/// `quantity = "illuminance" | "luminance" | "cylindrical" | "semi_cylindrical"`; a
+/// luminance meter's keys and a semi-cylinder's `facing` come with theirs.
 #[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum QuantityName {
     Illuminance,
     Luminance,
+    Cylindrical,
+    SemiCylindrical,
 }
 
 /// The `[camera]` table: the eye of `luxtally render`.

@@ -5,7 +5,8 @@
 // `!(x > 0.0)` is deliberate: it also rejects NaN (e.g. from an overflowing cross product).
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::file::{self, CameraFile, QuantityName, ReceiverFile, RequirementFile};
+use super::file::{self, CameraFile, GridName, QuantityName, ReceiverFile, RequirementFile};
+use super::grid::{self, Grid, GridError, GridRule};
 use super::objects::{load_object, GeometryBuilder};
 use super::{
     Camera, Check, Estimator, FigureName, Material, Quantity, Receiver, Requirement, Scene,
@@ -15,6 +16,7 @@ use crate::criteria::{self, StopCriteria};
 use crate::error::{Error, Result};
 use crate::input::{direction, required, vec3};
 use crate::light::{self, LoadContext};
+use glam::DVec3;
 use std::path::{Path, PathBuf};
 
 /// Loads and validates the scene file at `path`; relative mesh paths resolve against its
@@ -126,27 +128,54 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
     if !(u.cross(v).length() > 0.0) {
         return Err(Error::input(at, "zero-area receiver: u × v = 0"));
     }
-    if r.cells[0] == 0 || r.cells[1] == 0 {
-        return Err(Error::input(
-            format!("{at}.cells"),
-            format!("zero cells: {:?} (each must be ≥ 1)", r.cells),
-        ));
-    }
-    let quantity = match r.quantity.unwrap_or(QuantityName::Illuminance) {
-        QuantityName::Illuminance => {
-            if r.view_direction.is_some() || r.half_angle_deg.is_some() {
-                let key = if r.view_direction.is_some() {
-                    "view_direction"
-                } else {
-                    "half_angle_deg"
-                };
-                return Err(Error::input(
-                    format!("{at}.{key}"),
-                    "applies only to quantity = \"luminance\"",
-                ));
-            }
-            Quantity::Illuminance
+    let (area, grid) = receiver_cells(&r, corner, u, v, at)?;
+    let quantity = receiver_quantity(&r, at)?;
+    let estimator = r.estimator.unwrap_or(Estimator::Auto);
+    Ok(Receiver {
+        name: r.name,
+        corner: area.corner,
+        u: area.u,
+        v: area.v,
+        cells: area.cells,
+        quantity,
+        estimator,
+        grid,
+    })
+}
+
+/// What a receiver measures, with the keys of its quantity (a luminance meter's
+/// `view_direction` and `half_angle_deg`, a semi-cylinder's `facing`); another
+/// quantity's keys are errors.
+fn receiver_quantity(r: &ReceiverFile, at: &str) -> Result<Quantity> {
+    let name = r.quantity.unwrap_or(QuantityName::Illuminance);
+    let keys = [
+        (
+            "view_direction",
+            r.view_direction.is_some(),
+            QuantityName::Luminance,
+        ),
+        (
+            "half_angle_deg",
+            r.half_angle_deg.is_some(),
+            QuantityName::Luminance,
+        ),
+        ("facing", r.facing.is_some(), QuantityName::SemiCylindrical),
+    ];
+    for (key, given, owner) in keys {
+        if given && name != owner {
+            let owner = match owner {
+                QuantityName::Luminance => "luminance",
+                _ => "semi_cylindrical",
+            };
+            return Err(Error::input(
+                format!("{at}.{key}"),
+                format!("applies only to quantity = \"{owner}\""),
+            ));
         }
+    }
+    Ok(match name {
+        QuantityName::Illuminance => Quantity::Illuminance,
+        QuantityName::Cylindrical => Quantity::Cylindrical,
         QuantityName::Luminance => {
             let what = "quantity = \"luminance\"";
             let view_direction = direction(
@@ -166,18 +195,28 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
                 half_angle_deg,
             }
         }
-    };
-    let estimator = r.estimator.unwrap_or(Estimator::Auto);
-    Ok(Receiver {
-        name: r.name,
-        corner,
-        u,
-        v,
-        cells: r.cells,
-        quantity,
-        estimator,
+        QuantityName::SemiCylindrical => {
+            let what = "quantity = \"semi_cylindrical\"";
+            let f = direction(required(r.facing, at, "facing", what)?, at, "facing")?;
+            if !(f.z.abs() <= FACING_SLACK) {
+                return Err(Error::input(
+                    format!("{at}.facing"),
+                    format!(
+                        "must be horizontal (z = 0 within {FACING_SLACK:e} once normalised): \
+                         the semi-cylinder stands upright; got z = {:.6}",
+                        f.z
+                    ),
+                ));
+            }
+            Quantity::SemiCylindrical {
+                facing: DVec3::new(f.x, f.y, 0.0).normalize(),
+            }
+        }
     })
 }
+
+/// How far from horizontal (z of the normalised vector) a semi-cylinder's `facing` may be.
+const FACING_SLACK: f64 = 1e-6;
 
 /// The `[[requirements]]` entries, validated against the scene's `receivers`.
 fn requirements(
@@ -240,6 +279,75 @@ fn requirements(
         });
     }
     Ok(out)
+}
+
+/// A receiver's area and cells: `cells = [nu, nv]` as given, or `grid = "en12464"`
+/// (the rule of `scene::grid`, after its `grid_band_m` edge band, rounded as
+/// `grid_rounding` says). Exactly one of `cells` and `grid`.
+fn receiver_cells(
+    r: &ReceiverFile,
+    corner: DVec3,
+    u: DVec3,
+    v: DVec3,
+    at: &str,
+) -> Result<(Grid, Option<GridRule>)> {
+    let key = |k: &str| format!("{at}.{k}");
+    match (r.cells, r.grid) {
+        (Some(_), Some(_)) => Err(Error::input(
+            key("grid"),
+            "give either cells = [nu, nv] or grid = \"en12464\", not both",
+        )),
+        (None, None) => Err(Error::input(
+            key("cells"),
+            "missing (give cells = [nu, nv] or grid = \"en12464\")",
+        )),
+        (Some(cells), None) => {
+            for (k, given) in [
+                ("grid_band_m", r.grid_band_m.is_some()),
+                ("grid_rounding", r.grid_rounding.is_some()),
+            ] {
+                if given {
+                    return Err(Error::input(key(k), "applies only to grid = \"en12464\""));
+                }
+            }
+            if cells[0] == 0 || cells[1] == 0 {
+                return Err(Error::input(
+                    key("cells"),
+                    format!("zero cells: {cells:?} (each must be ≥ 1)"),
+                ));
+            }
+            Ok((
+                Grid {
+                    corner,
+                    u,
+                    v,
+                    cells,
+                },
+                None,
+            ))
+        }
+        (None, Some(GridName::En12464)) => {
+            let band_m = r.grid_band_m.map_or(grid::DEFAULT_BAND_M, |b| b.0);
+            if !(band_m >= 0.0) {
+                return Err(Error::input(
+                    key("grid_band_m"),
+                    format!("must be ≥ 0, got {band_m}"),
+                ));
+            }
+            let rule = GridRule {
+                band_m,
+                rounding: r.grid_rounding.unwrap_or_default(),
+            };
+            let g = rule.apply(corner, u, v).map_err(|e| {
+                let k = match e {
+                    GridError::BandTooWide { .. } => "grid_band_m",
+                    GridError::TooManyPoints { .. } => "grid",
+                };
+                Error::input(key(k), e.to_string())
+            })?;
+            Ok((g, Some(rule)))
+        }
+    }
 }
 
 /// Largest image side: beyond it an image is surely a typo (and a gigabyte of pixels).

@@ -12,6 +12,7 @@ use std::sync::Arc;
 pub mod adjacency;
 pub mod file;
 pub mod fingerprint;
+pub mod grid;
 mod instance;
 mod load;
 pub mod mesh_io;
@@ -190,6 +191,38 @@ pub enum Quantity {
         view_direction: DVec3,
         half_angle_deg: f64,
     },
+    /// Cylindrical illuminance Ez (lx): the mean illuminance on the curved surface of
+    /// an infinitesimal vertical cylinder (axis world z) at the cell's points,
+    /// (1/π)∫ L sin θ dω with θ from the vertical; light from either side of the
+    /// receiver's plane counts.
+    Cylindrical,
+    /// Semi-cylindrical illuminance (lx): the same on the half of the cylinder facing
+    /// `facing`, (1/π)∫ L (|s_h| + s_h·f) dω, s_h the horizontal part of the unit
+    /// vector towards where the light comes from.
+    SemiCylindrical {
+        /// Horizontal unit vector (z = 0): the normal of the half-cylinder's middle.
+        facing: DVec3,
+    },
+}
+
+impl Quantity {
+    /// As in the scene file and summary.json.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Quantity::Illuminance => "illuminance",
+            Quantity::Luminance { .. } => "luminance",
+            Quantity::Cylindrical => "cylindrical",
+            Quantity::SemiCylindrical { .. } => "semi_cylindrical",
+        }
+    }
+
+    /// The unit of its values, as summary.json writes it.
+    pub fn unit(&self) -> &'static str {
+        match self {
+            Quantity::Luminance { .. } => "cd/m2",
+            _ => "lx",
+        }
+    }
 }
 
 /// How a receiver is scored (`estimator = "track" | "next_event" | "auto"`): its name
@@ -284,6 +317,10 @@ pub struct Receiver {
     pub cells: [u32; 2],
     pub quantity: Quantity,
     pub estimator: Estimator,
+    /// `Some` when the cells (and the area, after its edge band) were made by the
+    /// EN 12464-1 rule (`grid = "en12464"`, [`grid`]); corner, u, v and cells above are
+    /// then the rule's result.
+    pub grid: Option<grid::GridRule>,
 }
 
 impl Receiver {

@@ -277,6 +277,7 @@ mod tests {
             cells: [8, 4],
             quantity: Quantity::Illuminance,
             estimator: Estimator::Auto,
+            grid: None,
         }]
     }
 

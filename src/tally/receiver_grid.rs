@@ -4,7 +4,7 @@
 
 use crate::scene::{Estimator, Quantity, Receiver};
 use glam::DVec3;
-use std::f64::consts::TAU;
+use std::f64::consts::{FRAC_1_PI, TAU};
 
 /// A receiver prepared for scoring, in the scene's local frame.
 #[derive(Clone, Debug)]
@@ -50,6 +50,27 @@ pub(crate) enum Kind {
         cos_half_angle: f64,
         solid_angle_sr: f64,
     },
+    /// A small vertical cylinder at each point: [`cylinder_response`] without a facing.
+    Cylindrical,
+    /// The half of it facing `facing` (horizontal unit vector).
+    SemiCylindrical {
+        facing: DVec3,
+    },
+}
+
+/// What light arriving from unit direction `towards_source` (from the receiver point
+/// towards where the light comes from) gives an infinitesimal vertical cylinder (axis
+/// world z), per unit of illuminance on a plane facing the light (I/d²):
+/// (|s_h| + s_h·f)/π, s_h the horizontal part of `towards_source`, |s_h| = sin θ from
+/// the vertical. `facing` is zero for the whole cylinder (cylindrical illuminance,
+/// sin θ/π: the mean over the curved surface, whose projection towards the light is
+/// 2rh·sin θ of its 2πrh) and the unit horizontal normal of the half's middle for the
+/// semi-cylinder (sin θ·(1 + cos α)/π, α the horizontal angle between the facing and
+/// the light: its lit projection over its πrh). Light from above and below counts alike.
+#[inline]
+pub fn cylinder_response(towards_source: DVec3, facing: DVec3) -> f64 {
+    let (x, y) = (towards_source.x, towards_source.y);
+    ((x * x + y * y).sqrt() + x * facing.x + y * facing.y).max(0.0) * FRAC_1_PI
 }
 
 impl ReceiverGrid {
@@ -71,6 +92,8 @@ impl ReceiverGrid {
                     solid_angle_sr: TAU * (1.0 - cos_half_angle),
                 }
             }
+            Quantity::Cylindrical => Kind::Cylindrical,
+            Quantity::SemiCylindrical { facing } => Kind::SemiCylindrical { facing },
         };
         ReceiverGrid {
             name: r.name.clone(),
@@ -101,14 +124,17 @@ impl ReceiverGrid {
     /// What light travelling in unit direction `dir` is worth at the receiver, per unit
     /// of intensity over squared distance (cd/m² → the receiver's unit): cos θ on the
     /// front face for illuminance, 1/Ω inside the meter's cone for luminance (the meter
-    /// reads the mean luminance over its cone). `None` when it does not count.
+    /// reads the mean luminance over its cone), [`cylinder_response`] of the light's
+    /// origin −`dir` from either side for the cylinders. `None` when it does not count.
+    /// Every estimator goes through it: crossings (over |cos θ_n| per cell area),
+    /// connections and the sampled direct light (times 1/d²).
     #[inline]
     pub fn arrival_factor(&self, dir: DVec3) -> Option<f64> {
+        let positive = |f: f64| (f > 0.0).then_some(f);
         match self.kind {
-            Kind::Illuminance => {
-                let cos = -dir.dot(self.normal);
-                (cos > 0.0).then_some(cos)
-            }
+            Kind::Illuminance => positive(-dir.dot(self.normal)),
+            Kind::Cylindrical => positive(cylinder_response(-dir, DVec3::ZERO)),
+            Kind::SemiCylindrical { facing } => positive(cylinder_response(-dir, facing)),
             Kind::Luminance {
                 towards_meter,
                 cos_half_angle,
@@ -154,7 +180,62 @@ mod tests {
             cells: [4, 2],
             quantity: Quantity::Illuminance,
             estimator: Estimator::Track,
+            grid: None,
         }
+    }
+
+    #[test]
+    fn cylinder_response_is_sin_theta_over_pi_and_the_semi_cylinder_adds_its_facing() {
+        let pi = std::f64::consts::PI;
+        let f = DVec3::X;
+        // From straight above or below: nothing. From the horizon: 1/π.
+        assert_eq!(cylinder_response(DVec3::Z, DVec3::ZERO), 0.0);
+        assert_eq!(cylinder_response(-DVec3::Z, f), 0.0);
+        assert!((cylinder_response(DVec3::Y, DVec3::ZERO) - 1.0 / pi).abs() < 1e-15);
+        // 30° from the vertical, the source 60° round from the facing:
+        // sin 30°·(1 + cos 60°)/π.
+        let (t, a) = (30f64.to_radians(), 60f64.to_radians());
+        let s = DVec3::new(
+            libm::sin(t) * libm::cos(a),
+            libm::sin(t) * libm::sin(a),
+            libm::cos(t),
+        );
+        assert!((cylinder_response(s, DVec3::ZERO) - 0.5 / pi).abs() < 1e-15);
+        assert!((cylinder_response(s, f) - 0.5 * 1.5 / pi).abs() < 1e-15);
+        // From behind the half-cylinder: nothing; from below as from above.
+        assert_eq!(cylinder_response(DVec3::new(-1.0, 0.0, 0.3), f), 0.0);
+        let below = DVec3::new(s.x, s.y, -s.z);
+        assert_eq!(cylinder_response(below, f), cylinder_response(s, f));
+    }
+
+    #[test]
+    fn a_cylindrical_receiver_scores_crossings_from_both_faces() {
+        let mut r = desk();
+        r.quantity = Quantity::Cylindrical;
+        let g = ReceiverGrid::new(&r, DVec3::new(1.0, 1.0, 0.0), 10, Estimator::Track);
+        // Through (0.6, 1.7, 0.5) local (cell (1, 1)) at 45° from the vertical, down
+        // and then up.
+        let dir = DVec3::new(1.0, 0.0, -1.0).normalize();
+        let p = DVec3::new(0.6, 1.7, 0.5);
+        let down = g.crossing(p - dir * 2.0, dir, 0.0, 10.0).unwrap();
+        let up_dir = DVec3::new(dir.x, dir.y, -dir.z);
+        let up = g.crossing(p - up_dir * 2.0, up_dir, 0.0, 10.0).unwrap();
+        assert_eq!((down.cell, up.cell), (10 + 4 + 1, 10 + 4 + 1));
+        // sin θ/(π·|cos θ|·A_cell) = 1/(π·0.25) at 45°.
+        let expected = 1.0 / (std::f64::consts::PI * 0.25);
+        assert!((down.score_per_lm - expected).abs() < 1e-12);
+        assert_eq!(up.score_per_lm, down.score_per_lm);
+        // Straight down: a vertical cylinder sees nothing of it.
+        assert!(g.crossing(p + DVec3::Z, -DVec3::Z, 0.0, 10.0).is_none());
+        // A semi-cylinder facing the light's origin gets twice as much, one facing
+        // away nothing.
+        r.quantity = Quantity::SemiCylindrical { facing: -DVec3::X };
+        let g = ReceiverGrid::new(&r, DVec3::new(1.0, 1.0, 0.0), 10, Estimator::Track);
+        let c = g.crossing(p - dir * 2.0, dir, 0.0, 10.0).unwrap();
+        assert!((c.score_per_lm - 2.0 * expected).abs() < 1e-12);
+        r.quantity = Quantity::SemiCylindrical { facing: DVec3::X };
+        let g = ReceiverGrid::new(&r, DVec3::new(1.0, 1.0, 0.0), 10, Estimator::Track);
+        assert!(g.crossing(p - dir * 2.0, dir, 0.0, 10.0).is_none());
     }
 
     #[test]

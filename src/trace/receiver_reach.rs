@@ -29,7 +29,8 @@ pub struct Crossing {
     /// Distance from the segment's origin to the crossing (m).
     pub distance: f64,
     /// Score of a photon of unit flux (lm): 1/A_cell for illuminance,
-    /// 1/(A_cell·cos θ·Ω) for luminance.
+    /// 1/(A_cell·cos θ·Ω) for luminance, response/(A_cell·|cos θ|) for the cylinders
+    /// (sin θ/(π·|cos θ|) on a horizontal receiver: large at grazing crossings).
     pub score_per_lm: f64,
 }
 
@@ -63,7 +64,9 @@ impl ReceiverGrid {
     /// illuminance receiver the test is one straight pass over the batch doing
     /// `crossing`'s arithmetic, in its order, for every segment (no early exit to
     /// mispredict, and the compiler can use vector instructions), so the marks are exact;
-    /// callers then call `crossing` on the few marked segments.
+    /// callers then call `crossing` on the few marked segments. The other quantities
+    /// (a luminance meter's cone, the cylinders' two faces) call `crossing` on every
+    /// segment, so their marks are exact too.
     pub fn mark_crossings(
         &self,
         o: [&[f32]; 3],
@@ -112,28 +115,30 @@ impl ReceiverGrid {
 
     /// A next-event connection from a scattering vertex at `x`, in stratum `stratum` of
     /// [`Self::connections`]: a point of the receiver, its cell, and the factor that turns
-    /// the vertex's intensity towards it (cd) into the cell's score. Illuminance samples the point uniformly over the receiver
-    /// (factor = K·cos θ_r/d², K cells); luminance samples the direction uniformly in the
+    /// the vertex's intensity towards it (cd) into the cell's score. Illuminance and the
+    /// cylinders sample the point uniformly over the receiver (factor = K·f/d², K cells,
+    /// f the [`ReceiverGrid::arrival_factor`]: cos θ_r on the front face, the cylinders'
+    /// response from either side); luminance samples the direction uniformly in the
     /// meter's cone and follows it to the receiver (factor = 1/(A_cell·|cos θ_r|)), so
     /// every vertex a meter can see contributes, however close the meter is to it.
     #[inline]
     pub fn connect(&self, x: DVec3, stratum: u32, rng: &mut Pcg32) -> Option<Connection> {
         let strata = self.connections as f64;
         match self.kind {
-            Kind::Illuminance => {
+            Kind::Illuminance | Kind::Cylindrical | Kind::SemiCylindrical { .. } => {
                 // Stratum s of the receiver is the strip s/n ≤ a < (s+1)/n along u.
                 let (a, b) = ((stratum as f64 + uniform(rng)) / strata, uniform(rng));
                 let point = self.point_at(a, b);
                 let d = point - x;
                 let distance = d.length();
                 let dir = d / distance;
-                let cos = self.arrival_factor(dir)?;
+                let response = self.arrival_factor(dir)?;
                 Some(Connection {
                     point,
                     cell: self.cell_at(a, b),
                     dir,
                     distance,
-                    factor: self.cell_count() as f64 * cos / (distance * distance),
+                    factor: self.cell_count() as f64 * response / (distance * distance),
                 })
             }
             Kind::Luminance {
@@ -177,14 +182,29 @@ mod tests {
 
     #[test]
     fn batch_marks_are_exactly_the_crossings() {
+        for quantity in [
+            Quantity::Illuminance,
+            Quantity::Cylindrical,
+            Quantity::SemiCylindrical {
+                facing: DVec3::new(0.6, 0.8, 0.0),
+            },
+        ] {
+            batch_marks_match_crossings(quantity);
+        }
+    }
+
+    /// Both faces of a cylinder count: the generic path of `mark_crossings` must mark
+    /// the upward crossings too.
+    fn batch_marks_match_crossings(quantity: Quantity) {
         let desk = Receiver {
             name: "desk".into(),
             corner: DVec3::new(-0.5, -0.25, -0.7),
             u: DVec3::new(1.0, 0.0, 0.0),
             v: DVec3::new(0.0, 0.5, 0.0),
             cells: [64, 32],
-            quantity: Quantity::Illuminance,
+            quantity,
             estimator: Estimator::Track,
+            grid: None,
         };
         let grid = ReceiverGrid::new(&desk, DVec3::ZERO, 0, Estimator::Track);
         let mut rng = crate::rng::aux_stream(11);
@@ -208,17 +228,22 @@ mod tests {
         let mut marks = Vec::new();
         let [ox, oy, oz, dx, dy, dz, t] = &cols;
         grid.mark_crossings([ox, oy, oz], [dx, dy, dz], t, slack, &mut marks);
-        let mut crossed = 0;
+        let (mut crossed, mut upwards) = (0, 0);
         for k in 0..n {
             let o = DVec3::new(ox[k] as f64, oy[k] as f64, oz[k] as f64);
             let d = DVec3::new(dx[k] as f64, dy[k] as f64, dz[k] as f64);
             let exact = grid.crossing(o, d, -slack, t[k] as f64 + slack).is_some();
-            assert_eq!(marks[k], exact, "segment {k}");
+            assert_eq!(marks[k], exact, "{quantity:?}: segment {k}");
             crossed += exact as usize;
+            upwards += (exact && d.z > 0.0) as usize;
         }
         assert!(
             crossed > 100,
             "{crossed} crossings: the test must exercise both outcomes"
         );
+        match quantity {
+            Quantity::Illuminance => assert_eq!(upwards, 0, "illuminance: front face only"),
+            _ => assert!(upwards > 50, "{quantity:?}: {upwards} upward crossings"),
+        }
     }
 }

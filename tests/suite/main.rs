@@ -23,6 +23,7 @@ mod physics {
     mod bounce_cap;
     mod calibration;
     mod custom_light;
+    mod cylindrical;
     mod direct_light;
     mod extremes;
     mod figures;
@@ -42,6 +43,7 @@ mod engine {
 
 mod io {
     mod bad_input;
+    mod calculation_grid;
     mod f32_range;
     mod fuzz;
     mod outputs;

@@ -32,8 +32,15 @@ pub fn command(path: &Path) -> Result<()> {
         println!("  {}: {}", l.label, l.kind.describe());
     }
     for r in &scene.receivers {
+        let rule = r.grid.map_or(String::new(), |g| {
+            format!(
+                " (EN 12464-1 grid, band {} m, rounded {})",
+                g.band_m,
+                g.rounding.name()
+            )
+        });
         println!(
-            "  receiver {}: {}×{} cells of {:.4} m²",
+            "  receiver {}: {}×{} cells of {:.4} m²{rule}",
             r.name,
             r.cells[0],
             r.cells[1],

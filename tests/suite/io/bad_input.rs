@@ -335,6 +335,121 @@ fn bad_receiver_and_simulation_parameters_are_rejected() {
     assert_has(&m, &["simulation.time_limit"]);
 }
 
+#[test]
+fn bad_cylindrical_receivers_are_rejected() {
+    let semi = format!("{RECEIVER}quantity = \"semi_cylindrical\"\n");
+    let m = error_of(&semi);
+    assert_has(&m, &["receivers[0].facing", "missing", "semi_cylindrical"]);
+    let m = error_of(&format!("{semi}facing = [0, 0, 1]\n"));
+    assert_has(&m, &["receivers[0].facing", "horizontal"]);
+    let m = error_of(&format!("{semi}facing = [1, 0, 0.01]\n"));
+    assert_has(&m, &["receivers[0].facing", "horizontal"]);
+    let m = error_of(&format!("{semi}facing = [0, 0, 0]\n"));
+    assert_has(&m, &["receivers[0].facing", "zero direction"]);
+    let m = error_of(&format!(
+        "{semi}facing = [1, 0, 0]\nview_direction = [0, 0, -1]\n"
+    ));
+    assert_has(
+        &m,
+        &[
+            "receivers[0].view_direction",
+            "only to quantity = \"luminance\"",
+        ],
+    );
+    let cylinder = format!("{RECEIVER}quantity = \"cylindrical\"\n");
+    let m = error_of(&format!("{cylinder}facing = [1, 0, 0]\n"));
+    assert_has(
+        &m,
+        &[
+            "receivers[0].facing",
+            "only to quantity = \"semi_cylindrical\"",
+        ],
+    );
+    let m = error_of(&format!("{cylinder}view_direction = [0, 0, -1]\n"));
+    assert_has(
+        &m,
+        &[
+            "receivers[0].view_direction",
+            "only to quantity = \"luminance\"",
+        ],
+    );
+    let m = error_of(&format!("{cylinder}half_angle_deg = 10\n"));
+    assert_has(
+        &m,
+        &[
+            "receivers[0].half_angle_deg",
+            "only to quantity = \"luminance\"",
+        ],
+    );
+    let m = error_of(&format!("{RECEIVER}facing = [1, 0, 0]\n"));
+    assert_has(
+        &m,
+        &[
+            "receivers[0].facing",
+            "only to quantity = \"semi_cylindrical\"",
+        ],
+    );
+    let m = error_of(&format!(
+        "{RECEIVER}quantity = \"luminance\"\nview_direction = [0, 0, -1]\nhalf_angle_deg = 5\nfacing = [1, 0, 0]\n"
+    ));
+    assert_has(
+        &m,
+        &[
+            "receivers[0].facing",
+            "only to quantity = \"semi_cylindrical\"",
+        ],
+    );
+    let m = error_of(&format!("{RECEIVER}quantity = \"spherical\"\n"));
+    assert_has(
+        &m,
+        &["receivers[0].quantity", "cylindrical", "semi_cylindrical"],
+    );
+}
+
+/// A receiver without `cells`, for the `grid` keys.
+const GRID_RECEIVER: &str =
+    "[[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [3, 0, 0]\nv = [0, 2, 0]\n";
+
+#[test]
+fn bad_calculation_grids_are_rejected() {
+    let m = error_of(&format!("{RECEIVER}grid = \"en12464\"\n"));
+    assert_has(&m, &["receivers[0].grid", "not both"]);
+    let m = error_of(GRID_RECEIVER);
+    assert_has(&m, &["receivers[0].cells", "missing", "grid = \"en12464\""]);
+    let m = error_of(&format!("{GRID_RECEIVER}grid = \"en12193\"\n"));
+    assert_has(&m, &["receivers[0].grid", "en12464"]);
+    let m = error_of(&format!(
+        "{GRID_RECEIVER}grid = \"en12464\"\ngrid_band_m = -0.5\n"
+    ));
+    assert_has(&m, &["receivers[0].grid_band_m", "≥ 0", "-0.5"]);
+    // 2 m wide: a 1 m band on both sides leaves nothing; so does the default 0.5 m band
+    // on a 1 m side.
+    let m = error_of(&format!(
+        "{GRID_RECEIVER}grid = \"en12464\"\ngrid_band_m = 1\n"
+    ));
+    assert_has(&m, &["receivers[0].grid_band_m", "leaves no area"]);
+    let m = error_of(
+        "[[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [3, 0, 0]\nv = [0, 1, 0]\ngrid = \"en12464\"\n",
+    );
+    assert_has(
+        &m,
+        &["receivers[0].grid_band_m", "0.5 m band", "leaves no area"],
+    );
+    let m = error_of(&format!(
+        "{GRID_RECEIVER}grid = \"en12464\"\ngrid_rounding = \"odd\"\n"
+    ));
+    assert_has(&m, &["receivers[0].grid_rounding", "up", "nearest"]);
+    let m = error_of(&format!("{RECEIVER}grid_band_m = 0.5\n"));
+    assert_has(&m, &["receivers[0].grid_band_m", "only to grid"]);
+    let m = error_of(&format!("{RECEIVER}grid_rounding = \"up\"\n"));
+    assert_has(&m, &["receivers[0].grid_rounding", "only to grid"]);
+    // More points than a receiver holds: an error, not a wrapped count.
+    let m = error_of(
+        "[[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [1e12, 0, 0]\nv = [0, 1e12, 0]\ngrid = \"en12464\"\n",
+    );
+    assert_has(&m, &["receivers[0].grid", "points along u"]);
+}
+
 /// A small deterministic generator for the mutation test (no dependency needed).
 fn xorshift(state: &mut u64) -> u64 {
     *state ^= *state << 13;
