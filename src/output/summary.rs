@@ -82,6 +82,8 @@ pub struct Summary {
     pub target_unreachable: Option<String>,
     /// The verdicts on the scene's `[[requirements]]` (null without any).
     pub verdicts: Option<Verdicts>,
+    /// The `[[observers]]`' UGR by name (null without any; docs/ugr.md).
+    pub observers: Option<BTreeMap<String, super::observers::ObserverSummary>>,
 }
 
 #[derive(Serialize, Deserialize, Default)]
@@ -295,6 +297,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
             }),
             _ => None,
         },
+        observers: super::observers::observers(state),
     }
 }
 
