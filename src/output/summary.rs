@@ -82,7 +82,8 @@ pub struct Summary {
     pub target_unreachable: Option<String>,
     /// The verdicts on the scene's `[[requirements]]` (null without any).
     pub verdicts: Option<Verdicts>,
-    /// The `[[observers]]`' UGR by name (null without any; docs/ugr.md).
+    /// The `[[observers]]`' UGR by name (absent without any; docs/ugr.md).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub observers: Option<BTreeMap<String, super::observers::ObserverSummary>>,
 }
 

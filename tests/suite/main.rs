@@ -30,6 +30,7 @@ mod physics {
     mod luminaires;
     mod physics;
     mod render;
+    mod ugr;
     mod verdict;
 }
 
