@@ -52,7 +52,7 @@ pub enum Seen {
     Counted,
     /// Its centre lies behind the eye's frontal plane.
     Behind,
-    /// Its centre lies on or below the horizontal plane of the line of sight.
+    /// Its centre lies below the line of sight (H < 0).
     BelowLineOfSight,
     /// Beyond CIE Table 4.1's field (H/R > 1.9 or T/R > 3).
     OutsideField,
@@ -134,7 +134,7 @@ pub fn term(lum: &Luminaire, eye: DVec3, look: DVec3) -> Term {
     };
     let seen = if r_h_t[0] <= 0.0 || p <= 0.0 {
         Seen::Behind
-    } else if r_h_t[1] <= 0.0 {
+    } else if r_h_t[1] < 0.0 {
         Seen::BelowLineOfSight
     } else if r_h_t[1] / r_h_t[0] > MAX_H_OVER_R || r_h_t[2] / r_h_t[0] > MAX_T_OVER_R {
         Seen::OutsideField
