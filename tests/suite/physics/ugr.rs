@@ -320,3 +320,29 @@ fn scenes_without_observers_have_no_observers_entry() {
     );
     assert!(s.observers.is_none());
 }
+
+#[test]
+fn below_the_line_of_sight_and_too_large_a_source_are_flagged() {
+    // The eye above the luminaire's height: the source is below the line of sight.
+    let below = scene_text("").replace(&format!("position = {EYE:?}"), "position = [0, 0, 3.5]");
+    let s = run(&load(&below), 5_000, 1);
+    let o = observer(&s, "front");
+    assert_eq!(o.luminaires[0].status, "below the line of sight");
+    assert!(!o.luminaires[0].counted && o.ugr.is_none());
+    // 0.86 m from a 0.6 m square: ω ≈ 0.28 sr > 0.1, rated but not valid.
+    let near = scene_text("").replace(&format!("position = {EYE:?}"), "position = [2.3, 0.5, 2.3]");
+    let s = run(&load(&near), 5_000, 1);
+    let o = observer(&s, "front");
+    assert!(o.luminaires[0].counted && o.luminaires[0].omega_sr > 0.1);
+    assert!(o.ugr.is_some() && !o.valid);
+    assert!(o.invalid_reason.as_deref().unwrap().contains("solid angle"));
+}
+
+#[test]
+fn the_hidden_receiver_faces_the_line_of_sight() {
+    let s = run(&load(&scene_text("")), 5_000, 1);
+    // The luminaire is in front of `front` and behind `back`: only `front`'s receiver
+    // gets its direct light.
+    assert!(s.receivers["observer:front"].direct[0] > 0.0);
+    assert_eq!(s.receivers["observer:back"].direct[0], 0.0);
+}
