@@ -87,7 +87,7 @@ pub fn observers(state: &RunState<'_>) -> Option<BTreeMap<String, ObserverSummar
         let e_ind = cells
             .first()
             .map_or((0.0, f64::NAN), |c| ugr::indirect_part(c, t.counts()));
-        let r = ugr::rate(o, terms, e_ind);
+        let r = ugr::rate(terms, e_ind);
         let at = |e: f64| ugr::ugr(r.sum, e);
         let (e, s) = (r.e_ind_lx, r.e_ind_sigma_lx);
         let known = r.ugr.is_some() && s.is_finite();

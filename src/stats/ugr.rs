@@ -5,7 +5,7 @@
 
 use crate::accel::{RayBatch, RayCaster};
 use crate::light::Luminaire;
-use crate::scene::{Observer, Scene};
+use crate::scene::Scene;
 use crate::tally::{CellSums, Counts};
 use glam::DVec3;
 
@@ -215,9 +215,9 @@ pub struct Rating {
     pub invalid: Option<String>,
 }
 
-/// Observer `o`'s rating from its terms (occlusion applied by the caller) and E_ind.
-pub fn rate(o: &Observer, terms: Vec<Term>, e_ind: (f64, f64)) -> Rating {
-    let _ = o;
+/// An observer's rating from its terms (occlusion applied by the caller) and E_ind
+/// with its σ (lx).
+pub fn rate(terms: Vec<Term>, e_ind: (f64, f64)) -> Rating {
     let sum: f64 = terms.iter().map(Term::contribution).sum();
     let (e, e_sigma) = e_ind;
     let value = ugr(sum, e);
