@@ -5,6 +5,7 @@
 
 pub mod image;
 pub mod indirect_map;
+pub mod observers;
 pub mod ply;
 pub mod preview;
 pub mod receiver_files;

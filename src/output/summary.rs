@@ -83,6 +83,9 @@ pub struct Summary {
     /// The verdicts on the scene's `[[requirements]]` (absent without any).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub verdicts: Option<Verdicts>,
+    /// The `[[observers]]`' UGR by name (absent without any; docs/ugr.md).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub observers: Option<BTreeMap<String, super::observers::ObserverSummary>>,
 }
 
 #[derive(Serialize, Deserialize, Default)]
@@ -301,6 +304,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
             }),
             _ => None,
         },
+        observers: super::observers::observers(state),
     }
 }
 

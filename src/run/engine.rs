@@ -40,6 +40,9 @@ pub(crate) struct Engine<'s> {
     /// Per next-event receiver (in order), its cells' points per side in a direct
     /// replicate (`DirectLight::cell_sides`), computed at the first replicates.
     direct_sides: std::sync::OnceLock<Vec<Vec<u32>>>,
+    /// The scene and caster, for the observers' shadow rays (`stats::ugr`).
+    scene: &'s Scene,
+    caster: &'s dyn RayCaster,
 }
 
 impl<'s> Engine<'s> {
@@ -67,12 +70,16 @@ impl<'s> Engine<'s> {
             tracer,
             threads,
             direct_sides: std::sync::OnceLock::new(),
+            scene,
+            caster,
         })
     }
 
     /// What the set-up settled, `setup` being when it began.
     pub(crate) fn setup(&self, setup: Instant) -> RunSetup {
-        RunSetup::new(setup, &self.tracer, self.threads)
+        let mut s = RunSetup::new(setup, &self.tracer, self.threads);
+        s.observer_occluded = crate::stats::ugr::occlusion(self.scene, self.caster);
+        s
     }
 
     /// The direct light after the photons reached `tallies.photons`: at a schedule

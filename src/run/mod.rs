@@ -84,6 +84,9 @@ pub struct RunSetup {
     pub threads: usize,
     /// Per receiver: what `auto` (or `--estimator`) resolved to.
     pub estimators: Vec<Estimator>,
+    /// Per observer, per luminaire (`stats::ugr::luminaires`): whether its line to the
+    /// eye is blocked.
+    pub observer_occluded: Vec<Vec<bool>>,
 }
 
 impl RunSetup {
@@ -97,6 +100,7 @@ impl RunSetup {
             bounce_cap_a_priori: tracer.bounce_cap_a_priori,
             threads,
             estimators: tracer.receivers.iter().map(|g| g.estimator).collect(),
+            observer_occluded: Vec::new(),
         }
     }
 }

@@ -33,6 +33,8 @@ pub struct SceneFile {
     pub requirements: Vec<RequirementFile>,
     pub simulation: Option<toml::Value>,
     pub camera: Option<CameraFile>,
+    #[serde(default)]
+    pub observers: Vec<super::observers::ObserverFile>,
 }
 
 /// A `[[requirements]]` entry: the least values a receiver's figures must reach.

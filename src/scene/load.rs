@@ -57,8 +57,9 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         None => 1.0,
     };
     let lights = lights(raw.lights, origin, base_dir, maintenance_factor)?;
-    let receivers = receivers(raw.receivers, origin)?;
+    let mut receivers = receivers(raw.receivers, origin)?;
     let requirements = requirements(raw.requirements, &receivers, origin)?;
+    let observers = super::observers::observers(raw.observers, &lights, &mut receivers, origin)?;
 
     let simulation = match raw.simulation {
         Some(value) => simulation(value, origin)?,
@@ -81,6 +82,7 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         requirements,
         simulation,
         camera,
+        observers,
     })
 }
 

@@ -17,6 +17,7 @@ mod instance;
 mod load;
 pub mod mesh_io;
 mod objects;
+pub mod observers;
 pub mod shapes;
 mod triangle_ids;
 
@@ -24,6 +25,7 @@ pub use crate::light::Luminaire;
 pub use crate::surface::{Material, MaterialFile};
 pub use instance::{Instance, Instanced, Placement, Prototype, PrototypeMesh};
 pub use load::{load, load_str};
+pub use observers::Observer;
 pub use triangle_ids::TriangleIds;
 
 /// All triangles of the scene in one indexed mesh, in the re-centred local frame.
@@ -414,6 +416,9 @@ pub struct Scene {
     pub simulation: Simulation,
     /// The `[camera]` of `luxtally render`, if the file has one.
     pub camera: Option<Camera>,
+    /// The `[[observers]]` whose UGR the run reports (docs/ugr.md); each has a hidden
+    /// receiver `observer:NAME` at the end of `receivers`.
+    pub observers: Vec<Observer>,
 }
 
 /// The eye of `luxtally render` (world coordinates). Validated: `look_at` differs from

@@ -7,6 +7,7 @@ mod map;
 mod receiver;
 mod reliability;
 pub mod stop;
+pub mod ugr;
 pub mod verdict;
 
 use crate::scene::Geometry;

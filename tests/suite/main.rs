@@ -31,6 +31,7 @@ mod physics {
     mod luminaires;
     mod physics;
     mod render;
+    mod ugr;
     mod verdict;
 }
 

@@ -138,6 +138,9 @@ fn print_run(s: &summary::Summary, out: &Path) {
     if let Some(v) = &s.verdicts {
         print_verdicts(v);
     }
+    for (name, o) in s.observers.iter().flatten() {
+        println!("  observer {name}: {}", observer_line(o));
+    }
     println!(
         "  global: {} triangles, mean {:.4} lx, error {:.2} %",
         s.global.triangles,
@@ -216,6 +219,19 @@ fn receiver_line(r: &summary::ReceiverSummary) -> String {
         );
     }
     format!("mean {:.4} {}, {error}{flags}", r.mean, r.unit)
+}
+
+/// An observer's UGR and σ, or why it has none.
+fn observer_line(o: &luxtally::output::observers::ObserverSummary) -> String {
+    let value = match (o.ugr, o.ugr_sigma) {
+        (Some(u), Some(s)) => format!("UGR {u:.1} ± {s:.1}"),
+        (Some(u), None) => format!("UGR {u:.1} (error unknown)"),
+        _ => "UGR undefined".to_string(),
+    };
+    match &o.invalid_reason {
+        Some(why) => format!("{value} (not valid: {why})"),
+        None => value,
+    }
 }
 
 /// Why the bounce cap makes a run's error unreliable, in words.
