@@ -18,9 +18,12 @@
 //!   looking.
 //! - Emin, U0 and g2 take their parts' bounds as the figures do (docs/designers.md),
 //!   with these z.
+//! - A check decides only when the σ behind it is reliable (Ē's VOV ≤ 0.1; for Emin, U0
+//!   and g2 every cell reliable): early epochs, where few photons stand behind a cell's
+//!   σ, cannot end a run on a lucky bound.
 
 use super::figures::{judged_sigmas, mean_and_sigma, Cells};
-use super::receiver_stats;
+use super::{receiver_stats, CellStatus, MAX_RELIABLE_VOV};
 use crate::scene::{FigureName, Scene};
 use crate::tally::Tallies;
 use serde::{Deserialize, Serialize};
@@ -69,6 +72,9 @@ pub struct CheckVerdict {
     /// Photons by which an undecided check is expected to be decided, n·(zσ/margin)²
     /// (null once decided, or where the value sits on the threshold).
     pub decision_photons: Option<u64>,
+    /// Whether the σ behind the bounds is reliable (Ē's VOV, and for Emin, U0 and g2
+    /// every cell's status); an unreliable check stays UNDECIDED whatever its bounds.
+    pub reliable: bool,
 }
 
 /// Every check of a scene's requirements and the overall verdict.
@@ -102,9 +108,12 @@ pub fn verdicts(scene: &Scene, tallies: &Tallies) -> Verdicts {
         let cells = tallies.receiver_cells(&scene.receivers, req.receiver);
         let stats = receiver_stats(cells, r.cells, counts, None);
         let total = tallies.receiver_total(&scene.receivers, req.receiver);
-        let (mean, mean_sigma, _) = mean_and_sigma(&stats, cells, total, counts);
+        let (mean, mean_sigma, mean_vov) = mean_and_sigma(&stats, cells, total, counts);
         let sigma = judged_sigmas(&stats);
         let known = !mean_sigma.is_nan() && sigma.iter().all(|s| !s.is_nan());
+        // A check decides only on σ it can trust: Ē's, and for the extremes every cell's.
+        let mean_reliable = mean_vov <= MAX_RELIABLE_VOV;
+        let cells_reliable = stats.status.iter().all(|s| *s == CellStatus::Reliable);
         let figures = Bounds {
             cells: Cells {
                 values: &stats.values,
@@ -120,7 +129,14 @@ pub fn verdicts(scene: &Scene, tallies: &Tallies) -> Verdicts {
             } else {
                 (f64::NAN, f64::NAN, f64::NAN, f64::NAN)
             };
-            let outcome = if low >= check.at_least {
+            let reliable = match check.figure {
+                FigureName::Mean => mean_reliable,
+                FigureName::Min | FigureName::G2 => cells_reliable,
+                FigureName::U0 => mean_reliable && cells_reliable,
+            };
+            let outcome = if !reliable {
+                Outcome::Undecided
+            } else if low >= check.at_least {
                 Outcome::Pass
             } else if high < check.at_least {
                 Outcome::Fail
@@ -144,6 +160,7 @@ pub fn verdicts(scene: &Scene, tallies: &Tallies) -> Verdicts {
                 outcome,
                 margin_sigma: margin / sigma,
                 decision_photons,
+                reliable,
             });
         }
     }

@@ -166,10 +166,13 @@ fn print_verdicts(v: &luxtally::stats::verdict::Verdicts) {
         v.checks.len()
     );
     for c in &v.checks {
-        let expected = c
-            .decision_photons
-            .map(|n| format!(", decided by about {n} photons"))
-            .unwrap_or_default();
+        let expected = if c.reliable {
+            c.decision_photons
+                .map(|n| format!(", decided by about {n} photons"))
+                .unwrap_or_default()
+        } else {
+            ", σ not yet reliable".to_string()
+        };
         println!(
             "    {} {} ≥ {}: {} ({:.4}, bounds {:.4} to {:.4}, margin {:+.1}σ{expected})",
             c.requirement,

@@ -164,3 +164,29 @@ fn the_bundled_en12464_office_is_decided_pass() {
     );
     assert!(s.photons_emitted < 2_000_000, "{}", s.photons_emitted);
 }
+
+/// A check whose σ is not yet reliable stays UNDECIDED, however clear its bounds: the
+/// bundled office after 120,000 photons has unreliable ceiling cells whose widened σ
+/// still bound the ceiling's U0 above its 0.10, yet it is not called PASS; the ceiling's
+/// Ē, whose σ is reliable, is.
+#[test]
+fn unreliable_sigma_decides_nothing() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/en12464_office.toml");
+    let scene = luxtally::scene::load(&path).expect("loads");
+    let s = run_options(&scene, &options(&scene, 120_000, 2, Backend::Embree));
+    assert!(
+        s.receivers["ceiling"].unreliable_cells > 0,
+        "the case needs unreliable cells"
+    );
+    let v = s.verdicts.expect("verdicts");
+    let check = |figure: &str| {
+        (v.checks.iter())
+            .find(|c| c.receiver == "ceiling" && c.figure == figure)
+            .expect("ceiling check")
+    };
+    let (em, u0) = (check("em"), check("u0"));
+    assert!(u0.low >= u0.at_least, "the bounds alone would pass: {u0:?}");
+    assert_eq!((u0.reliable, u0.outcome), (false, Outcome::Undecided));
+    assert_eq!((em.reliable, em.outcome), (true, Outcome::Pass), "{em:?}");
+    assert_eq!(v.overall, Outcome::Undecided);
+}
