@@ -221,7 +221,6 @@ pub fn figures(
             "{unreliable} of {n} cells unreliable (their σ widened)"
         ));
     }
-    f.reliable = notes.is_empty();
     let unknown = sigma.iter().filter(|s| s.is_nan()).count();
     let cells = Cells {
         values: &stats.values,
@@ -250,6 +249,8 @@ pub fn figures(
         f.g2 = Figure::unbounded(ratio(min, max));
     }
     (f.min_cell, f.max_cell) = (cells.argmin(), cells.argmax());
+    // Reliable only when every σ behind the figures is known and reliable.
+    f.reliable = notes.is_empty();
     if !(mean > 0.0) {
         notes.push("Ē = 0: U0 and g2 are undefined".into());
     }
@@ -395,5 +396,6 @@ mod tests {
         let f = figures(&s, s.mean, 5.0, 0.0, 0.95);
         assert!(f.min.low.is_nan() && f.u0.high.is_nan() && !f.mean.low.is_nan());
         assert!(f.note.contains("1 of 2 cells"), "{}", f.note);
+        assert!(!f.reliable, "unknown intervals are not reliable ones");
     }
 }
