@@ -325,10 +325,9 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
         .map(|(_, &vov)| vov)
         .fold(0.0, f64::max);
     let total = t.receiver_total(&state.scene.receivers, index);
-    let (mean, mean_sigma, mean_vov) = figures::mean_and_sigma(&stats, cells, total, t.counts());
+    let (mean_sigma, mean_vov) = figures::mean_and_sigma(cells, total, t.counts());
     let figures = figures::figures(
         &stats,
-        mean,
         mean_sigma,
         mean_vov,
         state.scene.simulation.confidence,

@@ -35,7 +35,7 @@ pub struct Figure {
 
 impl Figure {
     /// A value without a known interval.
-    fn unbounded(value: f64) -> Figure {
+    pub fn unbounded(value: f64) -> Figure {
         Figure {
             value,
             low: f64::NAN,
@@ -144,21 +144,16 @@ fn z_two_sided(confidence: f64, k: usize) -> f64 {
     normal_quantile(1.0 - (1.0 - confidence) / (2.0 * k as f64))
 }
 
-/// The receiver mean's value, σ and VOV from its total slot and its cells. The VOV is
-/// that of the photons' variance, scaled by its share of the whole (the direct light's
-/// replicates are many and even).
-pub fn mean_and_sigma(
-    stats: &ReceiverStats,
-    cells: &[CellSums],
-    total: &CellSums,
-    counts: Counts,
-) -> (f64, f64, f64) {
+/// The σ and VOV of a receiver's mean over its cells (`ReceiverStats::mean`), from its
+/// total slot and its cells. The VOV is that of the photons' variance, scaled by its
+/// share of the whole (the direct light's replicates are many and even).
+pub fn mean_and_sigma(cells: &[CellSums], total: &CellSums, counts: Counts) -> (f64, f64) {
     if counts.dark {
-        return (stats.mean, 0.0, 0.0);
+        return (0.0, 0.0);
     }
     if cells.iter().all(|c| c.hits == 0) {
         // Nothing scored: the mean reads 0 with an unknown error, as its cells do.
-        return (stats.mean, f64::NAN, 1.0);
+        return (f64::NAN, 1.0);
     }
     let n = cells.len() as f64;
     let photons = total.photon_moments(counts);
@@ -173,23 +168,13 @@ pub fn mean_and_sigma(
     };
     let var = photon_var + direct_var;
     let share = if var > 0.0 { photon_var / var } else { 1.0 };
-    (
-        stats.mean,
-        var.sqrt() * counts.unit,
-        photons.vov() * share * share,
-    )
+    (var.sqrt() * counts.unit, photons.vov() * share * share)
 }
 
-/// The figures of a receiver whose cell statistics are `stats` and whose mean is
-/// `mean` ± `mean_sigma` (see [`mean_and_sigma`]; `mean_vov` that mean's VOV), at
-/// `confidence`.
-pub fn figures(
-    stats: &ReceiverStats,
-    mean: f64,
-    mean_sigma: f64,
-    mean_vov: f64,
-    confidence: f64,
-) -> Figures {
+/// The figures of a receiver whose cell statistics are `stats`, its mean's σ
+/// `mean_sigma` and VOV `mean_vov` (see [`mean_and_sigma`]), at `confidence`.
+pub fn figures(stats: &ReceiverStats, mean_sigma: f64, mean_vov: f64, confidence: f64) -> Figures {
+    let mean = stats.mean;
     let mut notes: Vec<String> = Vec::new();
     // The mean's and the extremes' intervals alone, and at half the error rate for the
     // ratios' union bounds.
@@ -320,7 +305,12 @@ fn ratio(a: f64, b: f64) -> f64 {
 
 /// The interval of a ratio a/b ≤ 1 of non-negative parts from theirs: [a_lo/b_hi,
 /// a_hi/b_lo], within [0, 1]; its top is 1 while b's interval reaches 0.
-fn ratio_interval(a: f64, b: f64, (a_lo, a_hi): (f64, f64), (b_lo, b_hi): (f64, f64)) -> Figure {
+pub(super) fn ratio_interval(
+    a: f64,
+    b: f64,
+    (a_lo, a_hi): (f64, f64),
+    (b_lo, b_hi): (f64, f64),
+) -> Figure {
     let high = if b_lo > 0.0 {
         (a_hi / b_lo).min(1.0)
     } else {
@@ -377,7 +367,7 @@ mod tests {
     #[test]
     fn extremes_take_their_bounds_from_the_cells() {
         let s = stats(&[100.0, 200.0, 300.0], &[10.0, 10.0, 10.0]);
-        let f = figures(&s, s.mean, 5.0, 0.0, 0.95);
+        let f = figures(&s, 5.0, 0.0, 0.95);
         let z = 1.959_963_984_540_054;
         let z3 = normal_quantile(1.0 - 0.05 / 6.0);
         assert!((f.min.low - (100.0 - z * 10.0)).abs() < 1e-9);
@@ -393,7 +383,7 @@ mod tests {
     fn unknown_cells_leave_the_extremes_without_intervals() {
         let mut s = stats(&[100.0, 0.0], &[10.0, f64::NAN]);
         s.status[1] = CellStatus::Dark;
-        let f = figures(&s, s.mean, 5.0, 0.0, 0.95);
+        let f = figures(&s, 5.0, 0.0, 0.95);
         assert!(f.min.low.is_nan() && f.u0.high.is_nan() && !f.mean.low.is_nan());
         assert!(f.note.contains("1 of 2 cells"), "{}", f.note);
         assert!(!f.reliable, "unknown intervals are not reliable ones");

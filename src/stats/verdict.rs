@@ -22,7 +22,7 @@
 //!   and g2 every cell reliable): early epochs, where few photons stand behind a cell's
 //!   σ, cannot end a run on a lucky bound.
 
-use super::figures::{judged_sigmas, mean_and_sigma, Cells};
+use super::figures::{judged_sigmas, mean_and_sigma, ratio_interval, Cells, Figure};
 use super::{receiver_stats, CellStatus, MAX_RELIABLE_VOV};
 use crate::scene::{FigureName, Scene};
 use crate::tally::Tallies;
@@ -108,7 +108,8 @@ pub fn verdicts(scene: &Scene, tallies: &Tallies) -> Verdicts {
         let cells = tallies.receiver_cells(&scene.receivers, req.receiver);
         let stats = receiver_stats(cells, r.cells, counts, None);
         let total = tallies.receiver_total(&scene.receivers, req.receiver);
-        let (mean, mean_sigma, mean_vov) = mean_and_sigma(&stats, cells, total, counts);
+        let mean = stats.mean;
+        let (mean_sigma, mean_vov) = mean_and_sigma(cells, total, counts);
         let sigma = judged_sigmas(&stats);
         let known = !mean_sigma.is_nan() && sigma.iter().all(|s| !s.is_nan());
         // A check decides only on σ it can trust: Ē's, and for the extremes every cell's.
@@ -124,10 +125,10 @@ pub fn verdicts(scene: &Scene, tallies: &Tallies) -> Verdicts {
             photons: tallies.photons,
         };
         for check in &req.checks {
-            let (value, low, high, sigma) = if known && !stats.values.is_empty() {
+            let (Figure { value, low, high }, sigma) = if known && !stats.values.is_empty() {
                 figures.of(check.figure, alpha)
             } else {
-                (f64::NAN, f64::NAN, f64::NAN, f64::NAN)
+                (Figure::unbounded(f64::NAN), f64::NAN)
             };
             let reliable = match check.figure {
                 FigureName::Mean => mean_reliable,
@@ -189,44 +190,47 @@ struct Bounds<'a> {
 }
 
 impl Bounds<'_> {
-    /// (value, low, high, σ) of `figure`, each bound one-sided at rate `a` and
-    /// anytime-valid; the ratios take their parts' bounds at a/2 each.
-    fn of(&self, figure: FigureName, a: f64) -> (f64, f64, f64, f64) {
+    /// `figure` with its bounds, each one-sided at rate `a` and anytime-valid (the ratios
+    /// take their parts' bounds at a/2 each, as the figures' union bound does), and its
+    /// σ (the ratios' by the delta method, for the margin only).
+    fn of(&self, figure: FigureName, a: f64) -> (Figure, f64) {
         let c = &self.cells;
         let n = c.values.len() as f64;
         let z = |a: f64| anytime_z(a, self.photons);
         let (mean, mean_sigma) = (self.mean, self.mean_sigma);
         let mean_at = |a: f64| (mean - z(a) * mean_sigma, mean + z(a) * mean_sigma);
-        let (min, max) = c.extremes(z(a), z(a / n));
-        let (min_half, max_half) = c.extremes(z(a / 2.0), z(a / (2.0 * n)));
         let (min_sigma, max_sigma) = (c.sigma[c.argmin()], c.sigma[c.argmax()]);
-        // The ratios' σ by the delta method, for the margin only.
         let ratio_sigma =
             |v: f64, (s1, v1): (f64, f64), (s2, v2): (f64, f64)| v * libm::hypot(s1 / v1, s2 / v2);
         match figure {
             FigureName::Mean => {
                 let (low, high) = mean_at(a);
-                (mean, low, high, mean_sigma)
-            }
-            FigureName::Min => (min.value, min.low, min.high, min_sigma),
-            FigureName::U0 => {
-                let (low, high) = mean_at(a / 2.0);
-                let v = min.value / mean;
                 (
-                    v,
-                    min_half.low / high,
-                    (min_half.high / low.max(0.0)).min(1.0),
-                    ratio_sigma(v, (min_sigma, min.value), (mean_sigma, mean)),
+                    Figure {
+                        value: mean,
+                        low,
+                        high,
+                    },
+                    mean_sigma,
                 )
+            }
+            FigureName::Min => (c.extremes(z(a), z(a / n)).0, min_sigma),
+            FigureName::U0 => {
+                let (min, _) = c.extremes(z(a / 2.0), z(a / (2.0 * n)));
+                let u0 = ratio_interval(min.value, mean, (min.low, min.high), mean_at(a / 2.0));
+                let s = ratio_sigma(u0.value, (min_sigma, min.value), (mean_sigma, mean));
+                (u0, s)
             }
             FigureName::G2 => {
-                let v = min.value / max.value;
-                (
-                    v,
-                    min_half.low / max_half.high,
-                    (min_half.high / max_half.low.max(0.0)).min(1.0),
-                    ratio_sigma(v, (min_sigma, min.value), (max_sigma, max.value)),
-                )
+                let (min, max) = c.extremes(z(a / 2.0), z(a / (2.0 * n)));
+                let g2 = ratio_interval(
+                    min.value,
+                    max.value,
+                    (min.low, min.high),
+                    (max.low, max.high),
+                );
+                let s = ratio_sigma(g2.value, (min_sigma, min.value), (max_sigma, max.value));
+                (g2, s)
             }
         }
     }

@@ -380,3 +380,34 @@ pub fn shadow_scene() -> String {
         -10.0 * n.1
     )
 }
+
+/// A 1000 cd point source at (0.3, −0.2, 1) over [`BLACK_FLOOR`], a 4 × 4 receiver "r"
+/// over [−0.5, 0.5]², 0.1 mm up, and `extra` TOML after it; with the receiver's exact
+/// cell averages (index j·4 + i).
+pub fn point_over_small_receiver(extra: &str) -> (String, Vec<f64>) {
+    let toml = format!(
+        r#"{BLACK_FLOOR}
+        [[lights]]
+        type = "point"
+        position = [0.3, -0.2, 1.0]
+        intensity_cd = 1000
+        [[receivers]]
+        name = "r"
+        corner = [-0.5, -0.5, 0.0001]
+        u = [1, 0, 0]
+        v = [0, 1, 0]
+        cells = [4, 4]
+        {extra}"#
+    );
+    let h = 1.0 - 0.0001;
+    let exact = (0..16)
+        .map(|k| {
+            let (x0, y0) = (
+                -0.5 + (k % 4) as f64 * 0.25 - 0.3,
+                -0.5 + (k / 4) as f64 * 0.25 + 0.2,
+            );
+            point_source_cell_lx(1000.0, h, x0, x0 + 0.25, y0, y0 + 0.25)
+        })
+        .collect();
+    (toml, exact)
+}

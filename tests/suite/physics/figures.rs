@@ -100,38 +100,9 @@ fn assert_covers(c: &Coverage, what: &str) {
     );
 }
 
-/// A 1000 cd point source at (0.3, −0.2, 1) over a black floor and a 4 × 4 receiver
-/// over [−0.5, 0.5]², 0.1 mm up.
-fn point_scene() -> (String, Vec<f64>) {
-    let toml = format!(
-        r#"{BLACK_FLOOR}
-        [[lights]]
-        type = "point"
-        position = [0.3, -0.2, 1.0]
-        intensity_cd = 1000
-        [[receivers]]
-        name = "r"
-        corner = [-0.5, -0.5, 0.0001]
-        u = [1, 0, 0]
-        v = [0, 1, 0]
-        cells = [4, 4]"#
-    );
-    let h = 1.0 - 0.0001;
-    let exact = (0..16)
-        .map(|k| {
-            let (x0, y0) = (
-                -0.5 + (k % 4) as f64 * 0.25 - 0.3,
-                -0.5 + (k / 4) as f64 * 0.25 + 0.2,
-            );
-            point_source_cell_lx(1000.0, h, x0, x0 + 0.25, y0, y0 + 0.25)
-        })
-        .collect();
-    (toml, exact)
-}
-
 #[test]
 fn figures_of_a_point_source_cover_by_track() {
-    let (toml, exact) = point_scene();
+    let (toml, exact) = point_over_small_receiver("");
     let c = coverage(&toml, 20_000, Estimator::Track, &exact);
     assert_covers(&c, "point, track");
     assert!(
@@ -142,7 +113,7 @@ fn figures_of_a_point_source_cover_by_track() {
 
 #[test]
 fn figures_of_a_point_source_cover_by_next_event() {
-    let (toml, exact) = point_scene();
+    let (toml, exact) = point_over_small_receiver("");
     let c = coverage(&toml, 20_000, Estimator::NextEvent, &exact);
     assert_covers(&c, "point, next event");
 }

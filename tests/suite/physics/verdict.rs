@@ -11,33 +11,9 @@ use luxtally::run::RunOptions;
 use luxtally::scene::Estimator;
 use luxtally::stats::verdict::Outcome;
 
-/// A 1000 cd point source at (0.3, −0.2, 1) over a black floor, a 4 × 4 receiver over
-/// [−0.5, 0.5]², and `requirements` (TOML); the exact Ē and U0.
+/// [`point_over_small_receiver`] with `requirements` (TOML); the exact Ē and U0.
 fn point_scene(requirements: &str) -> (String, f64, f64) {
-    let toml = format!(
-        r#"{BLACK_FLOOR}
-        [[lights]]
-        type = "point"
-        position = [0.3, -0.2, 1.0]
-        intensity_cd = 1000
-        [[receivers]]
-        name = "r"
-        corner = [-0.5, -0.5, 0.0001]
-        u = [1, 0, 0]
-        v = [0, 1, 0]
-        cells = [4, 4]
-        {requirements}"#
-    );
-    let h = 1.0 - 0.0001;
-    let cells: Vec<f64> = (0..16)
-        .map(|k| {
-            let (x0, y0) = (
-                -0.5 + (k % 4) as f64 * 0.25 - 0.3,
-                -0.5 + (k / 4) as f64 * 0.25 + 0.2,
-            );
-            point_source_cell_lx(1000.0, h, x0, x0 + 0.25, y0, y0 + 0.25)
-        })
-        .collect();
+    let (toml, cells) = point_over_small_receiver(requirements);
     let mean = cells.iter().sum::<f64>() / 16.0;
     let min = cells.iter().copied().fold(f64::INFINITY, f64::min);
     (toml, mean, min / mean)
