@@ -60,16 +60,10 @@ pub fn observers(state: &RunState<'_>) -> Option<BTreeMap<String, ObserverSummar
     let z = normal_quantile(1.0 - (1.0 - confidence) / 2.0);
     let mut out = BTreeMap::new();
     for (k, o) in scene.observers.iter().enumerate() {
-        let occluded = state.setup.observer_occluded.get(k);
-        let mut terms = Vec::new();
-        let mut rows = Vec::new();
-        for (j, (label, lum)) in lums.iter().enumerate() {
-            let mut term = ugr::term(lum, o.position, o.look);
-            let blocked = occluded.and_then(|v| v.get(j)).copied().unwrap_or(false);
-            if blocked && term.seen == Seen::Counted {
-                term.seen = Seen::Occluded;
-            }
-            rows.push(ObserverLuminaire {
+        let occluded = state.setup.observer_occluded.get(k).map_or(&[][..], Vec::as_slice);
+        let terms = ugr::observer_terms(scene, o, occluded);
+        let rows = (lums.iter().zip(&terms).enumerate())
+            .map(|(j, ((label, _), term))| ObserverLuminaire {
                 label: label.to_string(),
                 luminance_cdm2: term.luminance_cdm2,
                 omega_sr: term.omega_sr,
@@ -77,16 +71,12 @@ pub fn observers(state: &RunState<'_>) -> Option<BTreeMap<String, ObserverSummar
                 r_m: term.r_h_t_m[0],
                 h_m: term.r_h_t_m[1],
                 t_m: term.r_h_t_m[2],
-                occluded: blocked,
+                occluded: occluded.get(j) == Some(&true),
                 counted: term.seen == Seen::Counted,
                 status: term.seen.as_str().to_string(),
-            });
-            terms.push(term);
-        }
-        let cells = t.receiver_cells(&scene.receivers, o.receiver);
-        let e_ind = cells
-            .first()
-            .map_or((0.0, f64::NAN), |c| ugr::indirect_part(c, t.counts()));
+            })
+            .collect();
+        let e_ind = ugr::e_ind(scene, t, o);
         let r = ugr::rate(terms, e_ind);
         let at = |e: f64| ugr::ugr(r.sum, e);
         let (e, s) = (r.e_ind_lx, r.e_ind_sigma_lx);

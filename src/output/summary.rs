@@ -295,7 +295,8 @@ pub fn build(state: &RunState<'_>) -> Summary {
             state.target,
             state.progress,
         ),
-        verdicts: (!scene.requirements.is_empty()).then(|| verdicts(scene, t)),
+        verdicts: (!scene.requirements.is_empty())
+            .then(|| verdicts(scene, t, &state.setup.observer_occluded)),
         forecast: match (state.options.stop.target_error, state.progress.forecast) {
             (Some(target_error), Some(f)) => Some(ForecastSummary {
                 target_error,
@@ -326,12 +327,18 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
         .fold(0.0, f64::max);
     let total = t.receiver_total(&state.scene.receivers, index);
     let (mean_sigma, mean_vov) = figures::mean_and_sigma(cells, total, t.counts());
-    let figures = figures::figures(
-        &stats,
-        mean_sigma,
-        mean_vov,
-        state.scene.simulation.confidence,
-    );
+    let confidence = state.scene.simulation.confidence;
+    let mut figures = figures::figures(&stats, mean_sigma, mean_vov, confidence);
+    if r.points {
+        figures.values = "point".into();
+    }
+    let receivers = &state.scene.receivers;
+    if let Some(p) = (state.scene.modelling.iter()).find(|p| p.cylindrical == index) {
+        let (eh, eh_sigma, _) = figures::receiver_mean(t, receivers, p.horizontal);
+        let ratio = figures::modelling_ratio((stats.mean, mean_sigma), (eh, eh_sigma), confidence);
+        figures.modelling = Some(ratio);
+        figures.modelling_with = Some(receivers[p.horizontal].name.clone());
+    }
     let (quantity, unit) = (r.quantity.name(), r.quantity.unit());
     ReceiverSummary {
         quantity: quantity.into(),

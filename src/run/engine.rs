@@ -40,9 +40,9 @@ pub(crate) struct Engine<'s> {
     /// Per next-event receiver (in order), its cells' points per side in a direct
     /// replicate (`DirectLight::cell_sides`), computed at the first replicates.
     direct_sides: std::sync::OnceLock<Vec<Vec<u32>>>,
-    /// The scene and caster, for the observers' shadow rays (`stats::ugr`).
-    scene: &'s Scene,
-    caster: &'s dyn RayCaster,
+    /// Per observer, per luminaire: whether its line to the eye is blocked
+    /// (`stats::ugr::occlusion`), for the observers' ratings and `ugr_max` checks.
+    pub(crate) observer_occluded: Vec<Vec<bool>>,
 }
 
 impl<'s> Engine<'s> {
@@ -52,6 +52,14 @@ impl<'s> Engine<'s> {
         caster: &'s dyn RayCaster,
     ) -> Result<Engine<'s>> {
         let threads = options.threads.max(1);
+        if options.estimator == Some(crate::scene::Estimator::Track) {
+            if let Some(r) = scene.receivers.iter().find(|r| r.points) {
+                return Err(crate::error::Error::input(
+                    format!("--estimator track: receiver `{}`", r.name),
+                    crate::scene::POINTS_NEED_NEXT_EVENT,
+                ));
+            }
+        }
         let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
         let flux = tracer.emitters.total_flux_lm;
         if !flux.is_finite() {
@@ -70,15 +78,14 @@ impl<'s> Engine<'s> {
             tracer,
             threads,
             direct_sides: std::sync::OnceLock::new(),
-            scene,
-            caster,
+            observer_occluded: crate::stats::ugr::occlusion(scene, caster),
         })
     }
 
     /// What the set-up settled, `setup` being when it began.
     pub(crate) fn setup(&self, setup: Instant) -> RunSetup {
         let mut s = RunSetup::new(setup, &self.tracer, self.threads);
-        s.observer_occluded = crate::stats::ugr::occlusion(self.scene, self.caster);
+        s.observer_occluded = self.observer_occluded.clone();
         s
     }
 

@@ -30,24 +30,11 @@ pub struct SceneFile {
     /// The maintenance factor of every luminaire without its own.
     pub maintenance_factor: Option<crate::light::MaintenanceFile>,
     #[serde(default)]
-    pub requirements: Vec<RequirementFile>,
+    pub requirements: Vec<super::requirements::RequirementFile>,
     pub simulation: Option<toml::Value>,
     pub camera: Option<CameraFile>,
     #[serde(default)]
     pub observers: Vec<super::observers::ObserverFile>,
-}
-
-/// A `[[requirements]]` entry: the least values a receiver's figures must reach.
-#[derive(Deserialize, Debug)]
-#[serde(deny_unknown_fields)]
-pub struct RequirementFile {
-    pub name: Option<String>,
-    pub receiver: String,
-    /// Ē (maintained), in the receiver's unit.
-    pub em: Option<f64>,
-    pub emin: Option<f64>,
-    pub u0: Option<f64>,
-    pub g2: Option<f64>,
 }
 
 /// `scale = 2` or `scale = [1, 2, 1]`.
@@ -289,6 +276,17 @@ pub struct ReceiverFile {
     pub half_angle_deg: Option<f64>,
     pub facing: Option<[f64; 3]>,
     pub estimator: Option<Estimator>,
+    /// A cylindrical receiver's horizontal partner: its modelling ratio Ēz/Ēh.
+    pub modelling_with: Option<String>,
+    pub values: Option<ValuesName>,
+}
+
+/// `values = "cell_average" | "point"`: what a receiver's cells score.
+#[derive(Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ValuesName {
+    CellAverage,
+    Point,
 }
 
 /// `grid = "en12464"`: the receiver's cells by the EN 12464-1 rule (`scene::grid`).

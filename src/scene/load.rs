@@ -5,12 +5,11 @@
 // `!(x > 0.0)` is deliberate: it also rejects NaN (e.g. from an overflowing cross product).
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use super::file::{self, CameraFile, GridName, QuantityName, ReceiverFile, RequirementFile};
+use super::file::{self, CameraFile, GridName, QuantityName, ReceiverFile, ValuesName};
 use super::grid::{self, Grid, GridError, GridRule};
 use super::objects::{load_object, GeometryBuilder};
 use super::{
-    Camera, Check, Estimator, FigureName, Material, Quantity, Receiver, Requirement, Scene,
-    SceneLight, Simulation,
+    requirements, Camera, Estimator, Material, Quantity, Receiver, Scene, SceneLight, Simulation,
 };
 use crate::criteria::{self, StopCriteria};
 use crate::error::{Error, Result};
@@ -57,9 +56,18 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         None => 1.0,
     };
     let lights = lights(raw.lights, origin, base_dir, maintenance_factor)?;
+    let modelling_with: Vec<Option<String>> =
+        (raw.receivers.iter()).map(|r| r.modelling_with.clone()).collect();
     let mut receivers = receivers(raw.receivers, origin)?;
-    let requirements = requirements(raw.requirements, &receivers, origin)?;
+    let modelling = requirements::modelling_pairs(&modelling_with, &receivers, origin)?;
     let observers = super::observers::observers(raw.observers, &lights, &mut receivers, origin)?;
+    let requirements = requirements::requirements(
+        raw.requirements,
+        &receivers,
+        &modelling,
+        &observers,
+        origin,
+    )?;
 
     let simulation = match raw.simulation {
         Some(value) => simulation(value, origin)?,
@@ -80,6 +88,7 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         lights,
         receivers,
         requirements,
+        modelling,
         simulation,
         camera,
         observers,
@@ -133,6 +142,20 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
     let (area, grid) = receiver_cells(&r, corner, u, v, at)?;
     let quantity = receiver_quantity(&r, at)?;
     let estimator = r.estimator.unwrap_or(Estimator::Auto);
+    let points = r.values == Some(ValuesName::Point);
+    if points && matches!(quantity, Quantity::Luminance { .. }) {
+        return Err(Error::input(
+            format!("{at}.values"),
+            "\"point\" applies to illuminance and the cylinders, not to a luminance meter \
+             (its cone meets the plane in an area)",
+        ));
+    }
+    if points && estimator == Estimator::Track {
+        return Err(Error::input(
+            format!("{at}.values"),
+            POINTS_NEED_NEXT_EVENT,
+        ));
+    }
     Ok(Receiver {
         name: r.name,
         corner: area.corner,
@@ -142,8 +165,13 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
         quantity,
         estimator,
         grid,
+        points,
     })
 }
+
+/// Why `values = "point"` refuses the track estimator.
+pub const POINTS_NEED_NEXT_EVENT: &str = "\"point\" needs the next-event estimator: \
+     photons crossing a plane score areas, and a point has none";
 
 /// What a receiver measures, with the keys of its quantity (a luminance meter's
 /// `view_direction` and `half_angle_deg`, a semi-cylinder's `facing`); another
@@ -219,69 +247,6 @@ fn receiver_quantity(r: &ReceiverFile, at: &str) -> Result<Quantity> {
 
 /// How far from horizontal (z of the normalised vector) a semi-cylinder's `facing` may be.
 const FACING_SLACK: f64 = 1e-6;
-
-/// The `[[requirements]]` entries, validated against the scene's `receivers`.
-fn requirements(
-    entries: Vec<RequirementFile>,
-    receivers: &[Receiver],
-    origin: &str,
-) -> Result<Vec<Requirement>> {
-    let mut out: Vec<Requirement> = Vec::new();
-    for (i, r) in entries.into_iter().enumerate() {
-        let at = format!("{origin}: requirements[{i}]");
-        let receiver = receivers
-            .iter()
-            .position(|x| x.name == r.receiver)
-            .ok_or_else(|| {
-                Error::input(
-                    format!("{at}.receiver"),
-                    format!("no receiver named `{}`", r.receiver),
-                )
-            })?;
-        let mut checks = Vec::new();
-        for (figure, value) in [
-            (FigureName::Mean, r.em),
-            (FigureName::Min, r.emin),
-            (FigureName::U0, r.u0),
-            (FigureName::G2, r.g2),
-        ] {
-            let Some(at_least) = value else { continue };
-            let ratio = matches!(figure, FigureName::U0 | FigureName::G2);
-            let ok = if ratio {
-                at_least > 0.0 && at_least <= 1.0
-            } else {
-                at_least > 0.0 && at_least <= f64::MAX
-            };
-            if !ok {
-                let range = if ratio { "in (0, 1]" } else { "positive" };
-                return Err(Error::input(
-                    format!("{at}.{}", figure.key()),
-                    format!("must be {range}, got {at_least}"),
-                ));
-            }
-            checks.push(Check { figure, at_least });
-        }
-        if checks.is_empty() {
-            return Err(Error::input(
-                at,
-                "sets no figure to check (em, emin, u0 or g2)",
-            ));
-        }
-        let name = r.name.unwrap_or_else(|| r.receiver.clone());
-        if out.iter().any(|o| o.name == name) {
-            return Err(Error::input(
-                format!("{at}.name"),
-                format!("duplicate requirement name `{name}`"),
-            ));
-        }
-        out.push(Requirement {
-            name,
-            receiver,
-            checks,
-        });
-    }
-    Ok(out)
-}
 
 /// A receiver's area and cells: `cells = [nu, nv]` as given, or `grid = "en12464"`
 /// (the rule of `scene::grid`, after its `grid_band_m` edge band, rounded as

@@ -18,14 +18,16 @@ mod load;
 pub mod mesh_io;
 mod objects;
 pub mod observers;
+pub mod requirements;
 pub mod shapes;
 mod triangle_ids;
 
 pub use crate::light::Luminaire;
 pub use crate::surface::{Material, MaterialFile};
 pub use instance::{Instance, Instanced, Placement, Prototype, PrototypeMesh};
-pub use load::{load, load_str};
+pub use load::{load, load_str, POINTS_NEED_NEXT_EVENT};
 pub use observers::Observer;
+pub use requirements::{Check, FigureName, Limit, ModellingPair, Requirement, Subject};
 pub use triangle_ids::TriangleIds;
 
 /// All triangles of the scene in one indexed mesh, in the re-centred local frame.
@@ -323,6 +325,9 @@ pub struct Receiver {
     /// EN 12464-1 rule (`grid = "en12464"`, [`grid`]); corner, u, v and cells above are
     /// then the rule's result.
     pub grid: Option<grid::GridRule>,
+    /// `values = "point"`: each cell scores the value at its centre (next-event only),
+    /// not its mean over the cell.
+    pub points: bool,
 }
 
 impl Receiver {
@@ -334,47 +339,6 @@ impl Receiver {
     pub fn cell_count(&self) -> usize {
         self.cells[0] as usize * self.cells[1] as usize
     }
-}
-
-/// A figure of a receiver a requirement can bound (docs/designers.md).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FigureName {
-    /// Ē, the mean over the cells.
-    Mean,
-    /// Emin, the least cell.
-    Min,
-    /// Emin/Ē.
-    U0,
-    /// Emin/Emax.
-    G2,
-}
-
-impl FigureName {
-    /// The requirement key, which is also the name the summary gives the check.
-    pub fn key(self) -> &'static str {
-        match self {
-            FigureName::Mean => "em",
-            FigureName::Min => "emin",
-            FigureName::U0 => "u0",
-            FigureName::G2 => "g2",
-        }
-    }
-}
-
-/// One bound of a requirement: `figure` ≥ `at_least`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Check {
-    pub figure: FigureName,
-    pub at_least: f64,
-}
-
-/// A `[[requirements]]` entry, validated: the checks one receiver must pass.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Requirement {
-    pub name: String,
-    /// Index into the scene's receivers.
-    pub receiver: usize,
-    pub checks: Vec<Check>,
 }
 
 /// Confidence of the receivers' figures' intervals unless the scene says otherwise.
@@ -411,8 +375,10 @@ pub struct Scene {
     pub geometry: Geometry,
     pub lights: Vec<SceneLight>,
     pub receivers: Vec<Receiver>,
-    /// What the receivers' figures must reach (`[[requirements]]`).
+    /// What the receivers' and observers' figures must reach (`[[requirements]]`).
     pub requirements: Vec<Requirement>,
+    /// The cylindrical receivers with `modelling_with`: their modelling ratio Ēz/Ēh.
+    pub modelling: Vec<ModellingPair>,
     pub simulation: Simulation,
     /// The `[camera]` of `luxtally render`, if the file has one.
     pub camera: Option<Camera>,

@@ -163,5 +163,6 @@ pub fn hidden_receiver(name: String, eye: DVec3, look: DVec3) -> Receiver {
         quantity: Quantity::Illuminance,
         estimator: Estimator::NextEvent,
         grid: None,
+        points: false,
     }
 }

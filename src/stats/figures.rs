@@ -18,7 +18,8 @@
 //!   which covers, is the figure to quote.
 
 use super::{widened_sigma, CellStatus, ReceiverStats};
-use crate::tally::{CellSums, Counts};
+use crate::scene::Receiver;
+use crate::tally::{CellSums, Counts, Tallies};
 use serde::{Deserialize, Serialize};
 
 /// A figure: its point value and its interval (NaN, null in JSON, where unknown).
@@ -54,7 +55,8 @@ impl Figure {
 pub struct Figures {
     /// Two-sided confidence of every interval.
     pub confidence: f64,
-    /// What the figures are over: `cell_average` (each cell's mean over its area).
+    /// What the figures are over: `cell_average` (each cell's mean over its area) or
+    /// `point` (the value at each cell's centre, `values = "point"`).
     pub values: String,
     pub mean: Figure,
     #[serde(deserialize_with = "super::null_as_nan::f64")]
@@ -69,6 +71,13 @@ pub struct Figures {
     pub max_cell: usize,
     pub u0: Figure,
     pub g2: Figure,
+    /// Ēz/Ēh over the receiver named `modelling_with` (a cylindrical receiver that has
+    /// one), its interval by a union bound of the two means' (conservative: they are
+    /// positively correlated).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub modelling: Option<Figure>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub modelling_with: Option<String>,
     /// false when some cell's σ is unreliable (its widened σ is used) or the mean's VOV
     /// is high: the intervals are then wider but cannot vouch for their coverage.
     pub reliable: bool,
@@ -243,6 +252,28 @@ pub fn figures(stats: &ReceiverStats, mean_sigma: f64, mean_vov: f64, confidence
     f
 }
 
+/// Receiver `k`'s mean over its cells with its σ and VOV ([`mean_and_sigma`]).
+pub fn receiver_mean(tallies: &Tallies, receivers: &[Receiver], k: usize) -> (f64, f64, f64) {
+    let cells = tallies.receiver_cells(receivers, k);
+    let total = tallies.receiver_total(receivers, k);
+    let counts = tallies.counts();
+    let stats = super::receiver_stats(cells, receivers[k].cells, counts, None);
+    let (sigma, vov) = mean_and_sigma(cells, total, counts);
+    (stats.mean, sigma, vov)
+}
+
+/// The modelling ratio Ēz/Ēh from the two means and their σ, its interval at
+/// `confidence` by a union bound (each mean's at half the error rate); no interval
+/// where either σ is unknown.
+pub fn modelling_ratio(ez: (f64, f64), eh: (f64, f64), confidence: f64) -> Figure {
+    if ez.1.is_nan() || eh.1.is_nan() {
+        return Figure::unbounded(ratio(ez.0, eh.0));
+    }
+    let z = z_two_sided(confidence, 2);
+    let at = |(m, s): (f64, f64)| (m - z * s, m + z * s);
+    unbounded_ratio_interval(ez.0, eh.0, at(ez), at(eh))
+}
+
 /// Each cell's σ as the figures judge it: its own where reliable, widened where not
 /// ([`widened_sigma`]), NaN where unknown.
 pub(super) fn judged_sigmas(stats: &ReceiverStats) -> Vec<f64> {
@@ -308,16 +339,37 @@ fn ratio(a: f64, b: f64) -> f64 {
 pub(super) fn ratio_interval(
     a: f64,
     b: f64,
+    a_range: (f64, f64),
+    b_range: (f64, f64),
+) -> Figure {
+    capped_ratio_interval(a, b, a_range, b_range, 1.0)
+}
+
+/// [`ratio_interval`] for a ratio that may exceed 1 (its top unbounded while b's
+/// interval reaches 0), as the modelling ratio Ēz/Ēh.
+pub fn unbounded_ratio_interval(
+    a: f64,
+    b: f64,
+    a_range: (f64, f64),
+    b_range: (f64, f64),
+) -> Figure {
+    capped_ratio_interval(a, b, a_range, b_range, f64::INFINITY)
+}
+
+fn capped_ratio_interval(
+    a: f64,
+    b: f64,
     (a_lo, a_hi): (f64, f64),
     (b_lo, b_hi): (f64, f64),
+    cap: f64,
 ) -> Figure {
     let high = if b_lo > 0.0 {
-        (a_hi / b_lo).min(1.0)
+        (a_hi / b_lo).min(cap)
     } else {
-        1.0
+        cap
     };
     let low = if b_hi > 0.0 {
-        (a_lo.max(0.0) / b_hi).clamp(0.0, 1.0)
+        (a_lo.max(0.0) / b_hi).clamp(0.0, cap)
     } else {
         0.0
     };

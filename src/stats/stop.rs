@@ -278,6 +278,7 @@ mod tests {
             quantity: Quantity::Illuminance,
             estimator: Estimator::Auto,
             grid: None,
+            points: false,
         }]
     }
 

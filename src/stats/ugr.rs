@@ -5,8 +5,8 @@
 
 use crate::accel::{RayBatch, RayCaster};
 use crate::light::Luminaire;
-use crate::scene::Scene;
-use crate::tally::{CellSums, Counts};
+use crate::scene::{Observer, Scene};
+use crate::tally::{CellSums, Counts, Tallies};
 use glam::DVec3;
 
 /// CIE 117's range of a source's solid angle in which UGR is valid, sr.
@@ -188,6 +188,30 @@ pub fn occlusion(scene: &Scene, caster: &dyn RayCaster) -> Vec<Vec<bool>> {
     let mut occluded = Vec::new();
     caster.occluded(&rays, &mut occluded);
     occluded.chunks(lums.len()).map(<[bool]>::to_vec).collect()
+}
+
+/// Observer `o`'s terms, one per luminaire of [`luminaires`], with `occluded` (per
+/// luminaire, from [`occlusion`]) applied.
+pub fn observer_terms(scene: &Scene, o: &Observer, occluded: &[bool]) -> Vec<Term> {
+    luminaires(scene)
+        .iter()
+        .enumerate()
+        .map(|(j, (_, lum))| {
+            let mut term = term(lum, o.position, o.look);
+            if occluded.get(j) == Some(&true) && term.seen == Seen::Counted {
+                term.seen = Seen::Occluded;
+            }
+            term
+        })
+        .collect()
+}
+
+/// Observer `o`'s E_ind and its σ (lx): its hidden receiver's photon part.
+pub fn e_ind(scene: &Scene, tallies: &Tallies, o: &Observer) -> (f64, f64) {
+    let cells = tallies.receiver_cells(&scene.receivers, o.receiver);
+    cells
+        .first()
+        .map_or((0.0, f64::NAN), |c| indirect_part(c, tallies.counts()))
 }
 
 /// The indirect (photons') part of a next-event cell and its σ, in the receiver's unit:

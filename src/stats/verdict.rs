@@ -1,6 +1,7 @@
-//! Verdicts on a scene's `[[requirements]]`: each check (Ē ≥ x, Emin ≥ x, U0 ≥ x,
-//! g2 ≥ x) is PASS when its lower confidence bound reaches the threshold, FAIL when its
-//! upper bound stays below it, UNDECIDED otherwise.
+//! Verdicts on a scene's `[[requirements]]`: a check of a least value (Ē, Emin, U0,
+//! g2, the modelling ratio's least) is PASS when its lower confidence bound reaches the
+//! threshold, FAIL when its upper bound stays below it, UNDECIDED otherwise; a check of
+//! a most value (UGR, the modelling ratio's most) the other way round.
 //!
 //! - **Error rate.** The scene's `1 − confidence` is split evenly over all checks
 //!   (Bonferroni), and each check's bounds are one-sided at its share: a check can only
@@ -22,9 +23,12 @@
 //!   and g2 every cell reliable): early epochs, where few photons stand behind a cell's
 //!   σ, cannot end a run on a lucky bound.
 
-use super::figures::{judged_sigmas, mean_and_sigma, ratio_interval, Cells, Figure};
-use super::{receiver_stats, CellStatus, MAX_RELIABLE_VOV};
-use crate::scene::{FigureName, Scene};
+use super::figures::{
+    judged_sigmas, mean_and_sigma, ratio_interval, receiver_mean, unbounded_ratio_interval, Cells,
+    Figure,
+};
+use super::{receiver_stats, ugr, CellStatus, MAX_RELIABLE_VOV};
+use crate::scene::{Check, FigureName, Limit, Requirement, Scene, Subject};
 use crate::tally::Tallies;
 use serde::{Deserialize, Serialize};
 
@@ -54,10 +58,17 @@ pub enum Outcome {
 #[serde(default)]
 pub struct CheckVerdict {
     pub requirement: String,
+    /// The receiver checked (an observer's hidden receiver for `ugr`).
     pub receiver: String,
-    /// `em`, `emin`, `u0` or `g2`.
+    /// The observer of a `ugr` check.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub observer: Option<String>,
+    /// `em`, `emin`, `u0`, `g2`, `modelling` or `ugr`.
     pub figure: String,
-    pub at_least: f64,
+    /// The limit: the figure must be at least `at_least`, or at most `at_most` (the
+    /// other is null).
+    pub at_least: Option<f64>,
+    pub at_most: Option<f64>,
     #[serde(deserialize_with = "super::null_as_nan::f64")]
     pub value: f64,
     /// The anytime-valid one-sided bounds at this check's error rate.
@@ -66,14 +77,16 @@ pub struct CheckVerdict {
     #[serde(deserialize_with = "super::null_as_nan::f64")]
     pub high: f64,
     pub outcome: Outcome,
-    /// (value − at_least)/σ of the figure (null where σ is unknown).
+    /// The value's distance to the limit on the passing side over its σ (negative:
+    /// failing; null where σ is unknown).
     #[serde(deserialize_with = "super::null_as_nan::f64")]
     pub margin_sigma: f64,
     /// Photons by which an undecided check is expected to be decided, n·(zσ/margin)²
     /// (null once decided, or where the value sits on the threshold).
     pub decision_photons: Option<u64>,
-    /// Whether the σ behind the bounds is reliable (Ē's VOV, and for Emin, U0 and g2
-    /// every cell's status); an unreliable check stays UNDECIDED whatever its bounds.
+    /// Whether the σ behind the bounds is reliable (the means' VOV, for Emin, U0 and
+    /// g2 every cell's status, for UGR the eye's cell and a valid rating); an
+    /// unreliable check stays UNDECIDED whatever its bounds.
     pub reliable: bool,
 }
 
@@ -90,79 +103,49 @@ pub struct Verdicts {
     pub checks: Vec<CheckVerdict>,
 }
 
+impl CheckVerdict {
+    /// "≥ 500" or "≤ 19".
+    pub fn limit_text(&self) -> String {
+        match (self.at_least, self.at_most) {
+            (Some(x), _) => format!("≥ {x}"),
+            (None, Some(x)) => format!("≤ {x}"),
+            (None, None) => String::new(),
+        }
+    }
+}
+
 impl Verdicts {
     pub fn decided(&self) -> bool {
         self.checks.iter().all(|c| c.outcome != Outcome::Undecided)
     }
 }
 
-/// The verdicts on `scene`'s requirements from `tallies`.
-pub fn verdicts(scene: &Scene, tallies: &Tallies) -> Verdicts {
+/// The verdicts on `scene`'s requirements from `tallies`; `observer_occluded` is, per
+/// observer, per luminaire, whether its line to the eye is blocked
+/// (`stats::ugr::occlusion`).
+pub fn verdicts(scene: &Scene, tallies: &Tallies, observer_occluded: &[Vec<bool>]) -> Verdicts {
     let confidence = scene.simulation.confidence;
     let count: usize = scene.requirements.iter().map(|r| r.checks.len()).sum();
     let alpha = (1.0 - confidence) / count.max(1) as f64;
-    let counts = tallies.counts();
     let mut checks = Vec::with_capacity(count);
     for req in &scene.requirements {
-        let r = &scene.receivers[req.receiver];
-        let cells = tallies.receiver_cells(&scene.receivers, req.receiver);
-        let stats = receiver_stats(cells, r.cells, counts, None);
-        let total = tallies.receiver_total(&scene.receivers, req.receiver);
-        let mean = stats.mean;
-        let (mean_sigma, mean_vov) = mean_and_sigma(cells, total, counts);
-        let sigma = judged_sigmas(&stats);
-        let known = !mean_sigma.is_nan() && sigma.iter().all(|s| !s.is_nan());
-        // A check decides only on σ it can trust: Ē's, and for the extremes every cell's.
-        let mean_reliable = mean_vov <= MAX_RELIABLE_VOV;
-        let cells_reliable = stats.status.iter().all(|s| *s == CellStatus::Reliable);
-        let figures = Bounds {
-            cells: Cells {
-                values: &stats.values,
-                sigma: &sigma,
-            },
-            mean,
-            mean_sigma,
-            photons: tallies.photons,
+        let subject = match req.subject {
+            Subject::Receiver(k) => Judge::Receiver(ReceiverBounds::new(scene, tallies, k)),
+            Subject::Observer(k) => {
+                let occluded = observer_occluded.get(k).map_or(&[][..], Vec::as_slice);
+                Judge::Observer(ObserverBounds::new(scene, tallies, k, occluded))
+            }
         };
         for check in &req.checks {
-            let (Figure { value, low, high }, sigma) = if known && !stats.values.is_empty() {
-                figures.of(check.figure, alpha)
-            } else {
-                (Figure::unbounded(f64::NAN), f64::NAN)
-            };
-            let reliable = match check.figure {
-                FigureName::Mean => mean_reliable,
-                FigureName::Min | FigureName::G2 => cells_reliable,
-                FigureName::U0 => mean_reliable && cells_reliable,
-            };
-            let outcome = if !reliable {
-                Outcome::Undecided
-            } else if low >= check.at_least {
-                Outcome::Pass
-            } else if high < check.at_least {
-                Outcome::Fail
-            } else {
-                Outcome::Undecided
-            };
-            let margin = value - check.at_least;
-            let decision_photons = (outcome == Outcome::Undecided && margin != 0.0 && sigma > 0.0)
-                .then(|| {
-                    let k = anytime_z(alpha, tallies.photons) * sigma / margin.abs();
-                    (tallies.photons as f64 * k * k).min(u64::MAX as f64) as u64
-                });
-            checks.push(CheckVerdict {
-                requirement: req.name.clone(),
-                receiver: r.name.clone(),
-                figure: check.figure.key().into(),
-                at_least: check.at_least,
-                value,
-                low,
-                high,
-                outcome,
-                margin_sigma: margin / sigma,
-                decision_photons,
-                reliable,
-            });
+            let (figure, sigma, reliable) = subject.of(check.figure, alpha);
+            checks.push(check_verdict(
+                req,
+                scene,
+                check,
+                (figure, sigma, reliable),
+                anytime_z(alpha, tallies.photons),
+                tallies.photons,
+            ));
         }
     }
     let overall = if checks.iter().any(|c| c.outcome == Outcome::Fail) {
@@ -181,45 +164,171 @@ pub fn verdicts(scene: &Scene, tallies: &Tallies) -> Verdicts {
     }
 }
 
-/// A receiver's cells and mean after `photons` photons, for the checks' bounds.
-struct Bounds<'a> {
-    cells: Cells<'a>,
-    mean: f64,
-    mean_sigma: f64,
+/// A check's verdict from its figure's one-sided bounds (each at the check's rate `z`
+/// stands for), its σ and whether that σ is reliable.
+fn check_verdict(
+    req: &Requirement,
+    scene: &Scene,
+    check: &Check,
+    (figure, sigma, reliable): (Figure, f64, bool),
+    z: f64,
+    photons: u64,
+) -> CheckVerdict {
+    let Figure { value, low, high } = figure;
+    let x = check.limit.value();
+    let (pass, fail) = match check.limit {
+        Limit::AtLeast(_) => (low >= x, high < x),
+        Limit::AtMost(_) => (high <= x, low > x),
+    };
+    let outcome = if !reliable {
+        Outcome::Undecided
+    } else if pass {
+        Outcome::Pass
+    } else if fail {
+        Outcome::Fail
+    } else {
+        Outcome::Undecided
+    };
+    let margin = check.limit.margin(value);
+    let decision_photons = (outcome == Outcome::Undecided && margin != 0.0 && sigma > 0.0)
+        .then(|| {
+            let k = z * sigma / margin.abs();
+            (photons as f64 * k * k).min(u64::MAX as f64) as u64
+        });
+    let (receiver, observer) = match req.subject {
+        Subject::Receiver(k) => (scene.receivers[k].name.clone(), None),
+        Subject::Observer(k) => {
+            let o = &scene.observers[k];
+            (scene.receivers[o.receiver].name.clone(), Some(o.name.clone()))
+        }
+    };
+    CheckVerdict {
+        requirement: req.name.clone(),
+        receiver,
+        observer,
+        figure: check.figure.key().into(),
+        at_least: matches!(check.limit, Limit::AtLeast(_)).then_some(x),
+        at_most: matches!(check.limit, Limit::AtMost(_)).then_some(x),
+        value,
+        low,
+        high,
+        outcome,
+        margin_sigma: margin / sigma,
+        decision_photons,
+        reliable,
+    }
+}
+
+/// What a requirement's checks are judged on.
+enum Judge {
+    Receiver(ReceiverBounds),
+    Observer(ObserverBounds),
+}
+
+impl Judge {
+    /// `figure` with its one-sided bounds at rate `a`, its σ (for the margin) and
+    /// whether that σ is reliable.
+    fn of(&self, figure: FigureName, a: f64) -> (Figure, f64, bool) {
+        match self {
+            Judge::Receiver(r) => r.of(figure, a),
+            Judge::Observer(o) => o.of(a),
+        }
+    }
+}
+
+/// A receiver's mean over its cells, with its σ and whether that σ is reliable.
+#[derive(Clone, Copy)]
+struct Mean {
+    value: f64,
+    sigma: f64,
+    reliable: bool,
+}
+
+impl Mean {
+    fn of(scene: &Scene, tallies: &Tallies, k: usize) -> Mean {
+        let (value, sigma, vov) = receiver_mean(tallies, &scene.receivers, k);
+        Mean {
+            value,
+            sigma,
+            reliable: vov <= MAX_RELIABLE_VOV,
+        }
+    }
+
+    /// The two-sided bounds at z.
+    fn at(&self, z: f64) -> (f64, f64) {
+        (self.value - z * self.sigma, self.value + z * self.sigma)
+    }
+}
+
+/// A receiver's cells and mean after `photons` photons, for the checks' bounds (and
+/// the mean of its modelling partner, if it has one).
+struct ReceiverBounds {
+    values: Vec<f64>,
+    sigma: Vec<f64>,
+    cells_reliable: bool,
+    mean: Mean,
+    horizontal: Option<Mean>,
     photons: u64,
 }
 
-impl Bounds<'_> {
-    /// `figure` with its bounds, each one-sided at rate `a` and anytime-valid (the ratios
-    /// take their parts' bounds at a/2 each, as the figures' union bound does), and its
-    /// σ (the ratios' by the delta method, for the margin only).
-    fn of(&self, figure: FigureName, a: f64) -> (Figure, f64) {
-        let c = &self.cells;
+impl ReceiverBounds {
+    fn new(scene: &Scene, tallies: &Tallies, k: usize) -> ReceiverBounds {
+        let cells = tallies.receiver_cells(&scene.receivers, k);
+        let total = tallies.receiver_total(&scene.receivers, k);
+        let counts = tallies.counts();
+        let stats = receiver_stats(cells, scene.receivers[k].cells, counts, None);
+        let horizontal = (scene.modelling.iter())
+            .find(|p| p.cylindrical == k)
+            .map(|p| Mean::of(scene, tallies, p.horizontal));
+        ReceiverBounds {
+            sigma: judged_sigmas(&stats),
+            cells_reliable: stats.status.iter().all(|s| *s == CellStatus::Reliable),
+            mean: {
+                let (sigma, vov) = mean_and_sigma(cells, total, counts);
+                Mean {
+                    value: stats.mean,
+                    sigma,
+                    reliable: vov <= MAX_RELIABLE_VOV,
+                }
+            },
+            values: stats.values,
+            horizontal,
+            photons: tallies.photons,
+        }
+    }
+
+    /// `figure` with its bounds, each one-sided at rate `a` and anytime-valid (the
+    /// ratios take their parts' bounds at a/2 each, as the figures' union bound does),
+    /// its σ (the ratios' by the delta method, for the margin only) and whether the σ
+    /// behind it is reliable.
+    fn of(&self, figure: FigureName, a: f64) -> (Figure, f64, bool) {
+        let c = Cells {
+            values: &self.values,
+            sigma: &self.sigma,
+        };
+        let known = !self.mean.sigma.is_nan() && self.sigma.iter().all(|s| !s.is_nan());
+        if !known || self.values.is_empty() {
+            return (Figure::unbounded(f64::NAN), f64::NAN, false);
+        }
         let n = c.values.len() as f64;
         let z = |a: f64| anytime_z(a, self.photons);
-        let (mean, mean_sigma) = (self.mean, self.mean_sigma);
-        let mean_at = |a: f64| (mean - z(a) * mean_sigma, mean + z(a) * mean_sigma);
+        let mean = self.mean;
         let (min_sigma, max_sigma) = (c.sigma[c.argmin()], c.sigma[c.argmax()]);
         let ratio_sigma =
             |v: f64, (s1, v1): (f64, f64), (s2, v2): (f64, f64)| v * libm::hypot(s1 / v1, s2 / v2);
+        let cells_reliable = self.cells_reliable;
         match figure {
             FigureName::Mean => {
-                let (low, high) = mean_at(a);
-                (
-                    Figure {
-                        value: mean,
-                        low,
-                        high,
-                    },
-                    mean_sigma,
-                )
+                let (low, high) = mean.at(z(a));
+                let value = mean.value;
+                (Figure { value, low, high }, mean.sigma, mean.reliable)
             }
-            FigureName::Min => (c.extremes(z(a), z(a / n)).0, min_sigma),
+            FigureName::Min => (c.extremes(z(a), z(a / n)).0, min_sigma, cells_reliable),
             FigureName::U0 => {
                 let (min, _) = c.extremes(z(a / 2.0), z(a / (2.0 * n)));
-                let u0 = ratio_interval(min.value, mean, (min.low, min.high), mean_at(a / 2.0));
-                let s = ratio_sigma(u0.value, (min_sigma, min.value), (mean_sigma, mean));
-                (u0, s)
+                let u0 = ratio_interval(min.value, mean.value, (min.low, min.high), mean.at(z(a / 2.0)));
+                let s = ratio_sigma(u0.value, (min_sigma, min.value), (mean.sigma, mean.value));
+                (u0, s, mean.reliable && cells_reliable)
             }
             FigureName::G2 => {
                 let (min, max) = c.extremes(z(a / 2.0), z(a / (2.0 * n)));
@@ -230,9 +339,56 @@ impl Bounds<'_> {
                     (max.low, max.high),
                 );
                 let s = ratio_sigma(g2.value, (min_sigma, min.value), (max_sigma, max.value));
-                (g2, s)
+                (g2, s, cells_reliable)
             }
+            FigureName::Modelling => {
+                let Some(h) = self.horizontal.filter(|h| !h.sigma.is_nan()) else {
+                    return (Figure::unbounded(f64::NAN), f64::NAN, false);
+                };
+                let zh = z(a / 2.0);
+                let m = unbounded_ratio_interval(mean.value, h.value, mean.at(zh), h.at(zh));
+                let s = ratio_sigma(m.value, (mean.sigma, mean.value), (h.sigma, h.value));
+                (m, s, mean.reliable && h.reliable)
+            }
+            FigureName::Ugr => (Figure::unbounded(f64::NAN), f64::NAN, false),
         }
+    }
+}
+
+/// An observer's glare sum and background illuminance, for a `ugr_max` check.
+struct ObserverBounds {
+    rating: ugr::Rating,
+    cell_reliable: bool,
+    photons: u64,
+}
+
+impl ObserverBounds {
+    fn new(scene: &Scene, tallies: &Tallies, k: usize, occluded: &[bool]) -> ObserverBounds {
+        let o = &scene.observers[k];
+        let terms = ugr::observer_terms(scene, o, occluded);
+        let cells = tallies.receiver_cells(&scene.receivers, o.receiver);
+        let stats = receiver_stats(cells, [1, 1], tallies.counts(), None);
+        ObserverBounds {
+            rating: ugr::rate(terms, ugr::e_ind(scene, tallies, o)),
+            cell_reliable: stats.status.first() == Some(&CellStatus::Reliable),
+            photons: tallies.photons,
+        }
+    }
+
+    /// UGR with its one-sided bounds at rate `a` (from E_ind's: UGR falls as E_ind
+    /// grows), σ_UGR and whether it is reliable (a valid rating on a reliable cell).
+    fn of(&self, a: f64) -> (Figure, f64, bool) {
+        let r = &self.rating;
+        let (Some(value), Some(sigma)) = (r.ugr, r.ugr_sigma) else {
+            return (Figure::unbounded(f64::NAN), f64::NAN, false);
+        };
+        let (e, s) = (r.e_ind_lx, r.e_ind_sigma_lx);
+        let z = anytime_z(a, self.photons);
+        let low = ugr::ugr(r.sum, e + z * s).unwrap_or(f64::NAN);
+        // E_ind's lower bound at or below 0: UGR has no upper bound.
+        let high = ugr::ugr(r.sum, e - z * s).unwrap_or(f64::INFINITY);
+        let reliable = self.cell_reliable && r.invalid.is_none() && sigma.is_finite();
+        (Figure { value, low, high }, sigma, reliable)
     }
 }
 

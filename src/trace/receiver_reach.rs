@@ -128,7 +128,14 @@ impl ReceiverGrid {
             Kind::Illuminance | Kind::Cylindrical | Kind::SemiCylindrical { .. } => {
                 // Stratum s of the receiver is the strip s/n ≤ a < (s+1)/n along u.
                 let (a, b) = ((stratum as f64 + uniform(rng)) / strata, uniform(rng));
-                let point = self.point_at(a, b);
+                // A point receiver's cell, picked as uniformly, scores at its centre.
+                let point = if self.points {
+                    let [nu, nv] = self.cells.map(|n| n as f64);
+                    let (i, j) = ((a * nu).floor().min(nu - 1.0), (b * nv).floor().min(nv - 1.0));
+                    self.point_at((i + 0.5) / nu, (j + 0.5) / nv)
+                } else {
+                    self.point_at(a, b)
+                };
                 let d = point - x;
                 let distance = d.length();
                 let dir = d / distance;
@@ -205,6 +212,7 @@ mod tests {
             quantity,
             estimator: Estimator::Track,
             grid: None,
+            points: false,
         };
         let grid = ReceiverGrid::new(&desk, DVec3::ZERO, 0, Estimator::Track);
         let mut rng = crate::rng::aux_stream(11);

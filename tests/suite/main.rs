@@ -30,6 +30,7 @@ mod physics {
     mod glossy;
     mod luminaires;
     mod physics;
+    mod points;
     mod render;
     mod ugr;
     mod verdict;

@@ -174,10 +174,10 @@ fn print_verdicts(v: &luxtally::stats::verdict::Verdicts) {
             ", σ not yet reliable".to_string()
         };
         println!(
-            "    {} {} ≥ {}: {} ({:.4}, bounds {:.4} to {:.4}, margin {:+.1}σ{expected})",
+            "    {} {} {}: {} ({:.4}, bounds {:.4} to {:.4}, margin {:+.1}σ{expected})",
             c.requirement,
             c.figure,
-            c.at_least,
+            c.limit_text(),
             word(c.outcome).unwrap_or_default(),
             c.value,
             c.low,
