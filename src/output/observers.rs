@@ -60,7 +60,11 @@ pub fn observers(state: &RunState<'_>) -> Option<BTreeMap<String, ObserverSummar
     let z = normal_quantile(1.0 - (1.0 - confidence) / 2.0);
     let mut out = BTreeMap::new();
     for (k, o) in scene.observers.iter().enumerate() {
-        let occluded = state.setup.observer_occluded.get(k).map_or(&[][..], Vec::as_slice);
+        let occluded = state
+            .setup
+            .observer_occluded
+            .get(k)
+            .map_or(&[][..], Vec::as_slice);
         let terms = ugr::observer_terms(scene, o, occluded);
         let rows = (lums.iter().zip(&terms).enumerate())
             .map(|(j, ((label, _), term))| ObserverLuminaire {

@@ -56,18 +56,14 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         None => 1.0,
     };
     let lights = lights(raw.lights, origin, base_dir, maintenance_factor)?;
-    let modelling_with: Vec<Option<String>> =
-        (raw.receivers.iter()).map(|r| r.modelling_with.clone()).collect();
+    let modelling_with: Vec<Option<String>> = (raw.receivers.iter())
+        .map(|r| r.modelling_with.clone())
+        .collect();
     let mut receivers = receivers(raw.receivers, origin)?;
     let modelling = requirements::modelling_pairs(&modelling_with, &receivers, origin)?;
     let observers = super::observers::observers(raw.observers, &lights, &mut receivers, origin)?;
-    let requirements = requirements::requirements(
-        raw.requirements,
-        &receivers,
-        &modelling,
-        &observers,
-        origin,
-    )?;
+    let requirements =
+        requirements::requirements(raw.requirements, &receivers, &modelling, &observers, origin)?;
 
     let simulation = match raw.simulation {
         Some(value) => simulation(value, origin)?,
@@ -151,10 +147,7 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
         ));
     }
     if points && estimator == Estimator::Track {
-        return Err(Error::input(
-            format!("{at}.values"),
-            POINTS_NEED_NEXT_EVENT,
-        ));
+        return Err(Error::input(format!("{at}.values"), POINTS_NEED_NEXT_EVENT));
     }
     Ok(Receiver {
         name: r.name,

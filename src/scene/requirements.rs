@@ -251,7 +251,10 @@ fn checks(
     }
     if let Some([lo, hi]) = r.modelling {
         if !(lo > 0.0 && lo < hi && hi <= f64::MAX) {
-            return bad("modelling", "[least, most] with 0 < least < most", lo);
+            return Err(Error::input(
+                format!("{at}.modelling"),
+                format!("must be [least, most] with 0 < least < most, got [{lo}, {hi}]"),
+            ));
         }
         let paired = matches!(subject, Subject::Receiver(k)
             if modelling.iter().any(|p| p.cylindrical == k));

@@ -336,12 +336,7 @@ fn ratio(a: f64, b: f64) -> f64 {
 
 /// The interval of a ratio a/b ≤ 1 of non-negative parts from theirs: [a_lo/b_hi,
 /// a_hi/b_lo], within [0, 1]; its top is 1 while b's interval reaches 0.
-pub(super) fn ratio_interval(
-    a: f64,
-    b: f64,
-    a_range: (f64, f64),
-    b_range: (f64, f64),
-) -> Figure {
+pub(super) fn ratio_interval(a: f64, b: f64, a_range: (f64, f64), b_range: (f64, f64)) -> Figure {
     capped_ratio_interval(a, b, a_range, b_range, 1.0)
 }
 

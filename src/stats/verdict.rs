@@ -190,8 +190,8 @@ fn check_verdict(
         Outcome::Undecided
     };
     let margin = check.limit.margin(value);
-    let decision_photons = (outcome == Outcome::Undecided && margin != 0.0 && sigma > 0.0)
-        .then(|| {
+    let decision_photons =
+        (outcome == Outcome::Undecided && margin != 0.0 && sigma > 0.0).then(|| {
             let k = z * sigma / margin.abs();
             (photons as f64 * k * k).min(u64::MAX as f64) as u64
         });
@@ -199,7 +199,10 @@ fn check_verdict(
         Subject::Receiver(k) => (scene.receivers[k].name.clone(), None),
         Subject::Observer(k) => {
             let o = &scene.observers[k];
-            (scene.receivers[o.receiver].name.clone(), Some(o.name.clone()))
+            (
+                scene.receivers[o.receiver].name.clone(),
+                Some(o.name.clone()),
+            )
         }
     };
     CheckVerdict {
@@ -326,7 +329,12 @@ impl ReceiverBounds {
             FigureName::Min => (c.extremes(z(a), z(a / n)).0, min_sigma, cells_reliable),
             FigureName::U0 => {
                 let (min, _) = c.extremes(z(a / 2.0), z(a / (2.0 * n)));
-                let u0 = ratio_interval(min.value, mean.value, (min.low, min.high), mean.at(z(a / 2.0)));
+                let u0 = ratio_interval(
+                    min.value,
+                    mean.value,
+                    (min.low, min.high),
+                    mean.at(z(a / 2.0)),
+                );
                 let s = ratio_sigma(u0.value, (min_sigma, min.value), (mean.sigma, mean.value));
                 (u0, s, mean.reliable && cells_reliable)
             }

@@ -131,7 +131,10 @@ impl ReceiverGrid {
                 // A point receiver's cell, picked as uniformly, scores at its centre.
                 let point = if self.points {
                     let [nu, nv] = self.cells.map(|n| n as f64);
-                    let (i, j) = ((a * nu).floor().min(nu - 1.0), (b * nv).floor().min(nv - 1.0));
+                    let (i, j) = (
+                        (a * nu).floor().min(nu - 1.0),
+                        (b * nv).floor().min(nv - 1.0),
+                    );
                     self.point_at((i + 0.5) / nu, (j + 0.5) / nv)
                 } else {
                     self.point_at(a, b)

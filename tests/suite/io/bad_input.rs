@@ -549,6 +549,64 @@ fn bad_requirements_are_rejected_in_one_line() {
     assert_has(&m, &["requirements[0]", "sets no figure"]);
     let m = error_of(&req("receiver = \"r\"\nugr = 19"));
     assert_has(&m, &["requirements[0]", "ugr"]);
+    // An observer's figure on a receiver, a receiver's on an observer, neither, both.
+    let m = error_of(&req("receiver = \"r\"\nugr_max = 19"));
+    assert_has(
+        &m,
+        &["requirements[0].ugr_max", "applies only to an observer"],
+    );
+    let m = error_of(&req("observer = \"eye\"\nugr_max = 19"));
+    assert_has(&m, &["requirements[0].observer", "no observer named `eye`"]);
+    let m = error_of(&req("em = 1"));
+    assert_has(
+        &m,
+        &[
+            "requirements[0]",
+            "exactly one of `receiver` and `observer`",
+        ],
+    );
+    for bad in ["0", "-3"] {
+        let m = error_of(&format!(
+            "{}[[observers]]\nname = \"eye\"\nposition = [0, 0, 1.2]\nlook = [1, 0, 0]\n",
+            req(&format!("observer = \"eye\"\nugr_max = {bad}"))
+        ));
+        assert_has(&m, &["requirements[0].ugr_max", "a positive number"]);
+    }
+    let m = error_of(&format!(
+        "{}[[observers]]\nname = \"eye\"\nposition = [0, 0, 1.2]\nlook = [1, 0, 0]\n",
+        req("observer = \"eye\"\nem = 100")
+    ));
+    assert_has(&m, &["requirements[0].em", "applies only to a receiver"]);
+    // The modelling ratio: on a cylindrical receiver with a partner, least < most.
+    let m = error_of(&req("receiver = \"r\"\nmodelling = [0.3, 0.6]"));
+    assert_has(&m, &["requirements[0].modelling", "modelling_with"]);
+    let paired = "[[receivers]]\nname = \"z\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\n\
+                  v = [0, 1, 0]\ncells = [2, 2]\nquantity = \"cylindrical\"\nmodelling_with = \"r\"\n";
+    for bad in ["[0.6, 0.3]", "[0, 0.6]", "[0.3, 0.3]"] {
+        let m = error_of(&format!(
+            "{paired}{}",
+            req(&format!("receiver = \"z\"\nmodelling = {bad}"))
+        ));
+        assert_has(&m, &["requirements[0].modelling", "0 < least < most"]);
+    }
+    let bad_partner = |with: &str| {
+        error_of(&format!(
+            "{RECEIVER}{}",
+            paired.replace(
+                "modelling_with = \"r\"",
+                &format!("modelling_with = \"{with}\"")
+            )
+        ))
+    };
+    let m = bad_partner("x");
+    assert_has(
+        &m,
+        &["receivers[1].modelling_with", "no receiver named `x`"],
+    );
+    let m = bad_partner("z");
+    assert_has(&m, &["receivers[1].modelling_with", "another receiver"]);
+    let m = error_of(&RECEIVER.replace("cells = [2, 2]", "cells = [2, 2]\nmodelling_with = \"r\""));
+    assert_has(&m, &["receivers[0].modelling_with", "cylindrical"]);
     let m = error_of(&format!(
         "{}[[requirements]]\nreceiver = \"r\"\nem = 1\n",
         req("receiver = \"r\"\nem = 1")

@@ -273,3 +273,70 @@ fn a_nearly_horizontal_facing_is_made_horizontal() {
         Quantity::SemiCylindrical { facing: DVec3::X }
     );
 }
+
+/// The modelling ratio Ēz/Ēh of the cylinder over a horizontal receiver on the same
+/// cells (`modelling_with`): its interval at 95 % covers the exact ratio of the exact
+/// means in at least 95 % of 200 seeds within binomial error (a union bound of the two
+/// means' intervals: conservative), and `modelling = [least, most]` checks decide it.
+#[test]
+fn the_modelling_ratio_covers_and_its_checks_decide() {
+    let horizontal = format!(
+        r#"
+        modelling_with = "h"
+        [[receivers]]
+        name = "h"
+        corner = [{X0}, {Y0}, 1.2]
+        u = [{SIDE_M}, 0, 0]
+        v = [0, {SIDE_M}, 0]
+        cells = [{CELLS}, {CELLS}]
+        "#
+    );
+    let w = SIDE_M / CELLS as f64;
+    let cells = (0..CELLS * CELLS).map(|k| (k % CELLS, k / CELLS));
+    let (mut ez, mut eh) = (0.0, 0.0);
+    for (i, j) in cells {
+        let (x0, y0) = (X0 + i as f64 * w, Y0 + j as f64 * w);
+        ez += exact_cell(i, j, None);
+        eh += point_source_cell_lx(INTENSITY_CD, DROP_M, x0, x0 + w, y0, y0 + w);
+    }
+    let exact = ez / eh;
+    let toml = scene_toml(
+        &format!("quantity = \"cylindrical\"\n{horizontal}"),
+        "next_event",
+    );
+    let scene = scene(&toml);
+    let seeds = 200;
+    let mut covered = 0;
+    for seed in 1..=seeds {
+        let o = RunOptions {
+            seed,
+            ..options(&scene, 4096, 2, Backend::Embree)
+        };
+        let s = run_options(&scene, &o);
+        let f = &s.receivers["r"].figures;
+        assert_eq!(f.modelling_with.as_deref(), Some("h"));
+        let m = f.modelling.expect("a modelling ratio");
+        assert!(m.low < m.value && m.value < m.high, "{m:?}");
+        covered += m.covers(exact) as u32;
+    }
+    let rate = covered as f64 / seeds as f64;
+    let sd = libm::sqrt(0.95 * 0.05 / seeds as f64);
+    eprintln!("modelling {exact:.4}: covered in {covered} of {seeds} seeds");
+    assert!(rate >= 0.95 - 3.0 * sd, "coverage {rate}");
+
+    let checks = |lo: f64, hi: f64| {
+        let toml =
+            format!("{toml}\n[[requirements]]\nreceiver = \"r\"\nmodelling = [{lo}, {hi}]\n");
+        let scene = crate::common::scene(&toml);
+        let v = run_options(&scene, &options(&scene, 100_000, 2, Backend::Embree)).verdicts;
+        let v = v.expect("verdicts");
+        assert_eq!(v.checks.len(), 2);
+        assert_eq!(v.checks[0].at_least, Some(lo));
+        assert_eq!(v.checks[1].at_most, Some(hi));
+        (v.checks[0].outcome, v.checks[1].outcome)
+    };
+    use luxtally::stats::verdict::Outcome::{Fail, Pass};
+    assert_eq!(checks(0.5 * exact, 2.0 * exact), (Pass, Pass));
+    assert_eq!(checks(1.5 * exact, 3.0 * exact), (Fail, Pass));
+    assert_eq!(checks(0.2 * exact, 0.7 * exact), (Pass, Fail));
+}

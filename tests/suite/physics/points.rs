@@ -52,7 +52,10 @@ fn point_source_lx(x: f64, y: f64) -> f64 {
 /// `point`.
 #[test]
 fn a_point_source_s_point_values_and_figures_are_exact_on_the_standard_s_grid() {
-    let s = run_scene(&point_source_scene("grid = \"en12464\"\ngrid_band_m = 0"), 20_000);
+    let s = run_scene(
+        &point_source_scene("grid = \"en12464\"\ngrid_band_m = 0"),
+        20_000,
+    );
     let r = &s.receivers["p"];
     let [nu, nv] = r.cells.map(|c| c as usize);
     // d = 4 m: p = 0.2·5^log10(4) = 0.53 m, 8 × 6 points (2011 rounding up).
@@ -82,7 +85,10 @@ fn a_point_source_s_point_values_and_figures_are_exact_on_the_standard_s_grid() 
         (f.g2, min / max),
     ] {
         for x in [figure.value, figure.low, figure.high] {
-            assert!((x - truth).abs() <= 1e-9 * truth, "{figure:?} against {truth}");
+            assert!(
+                (x - truth).abs() <= 1e-9 * truth,
+                "{figure:?} against {truth}"
+            );
         }
     }
 }
@@ -143,7 +149,10 @@ fn an_area_source_s_point_values_are_calibrated() {
         let factor = f(5.0, 4.0) - f(1.0, 4.0) - f(5.0, 1.0) + f(1.0, 1.0);
         PI * 1000.0 * factor
     };
-    assert!(r.sigma.iter().any(|s| *s > 0.0), "an area source is sampled");
+    assert!(
+        r.sigma.iter().any(|s| *s > 0.0),
+        "an area source is sampled"
+    );
     assert_matches(r, exact, "points under a panel");
 }
 
@@ -181,11 +190,17 @@ fn point_receivers_refuse_the_track_estimator_and_luminance() {
         Err(e) => e.to_string(),
     };
     let m = error(&point_source_scene("cells = [2, 2]\nestimator = \"track\""));
-    assert!(m.contains("receivers[0].values") && m.contains("next-event"), "{m}");
+    assert!(
+        m.contains("receivers[0].values") && m.contains("next-event"),
+        "{m}"
+    );
     let m = error(&point_source_scene(
         "cells = [2, 2]\nquantity = \"luminance\"\nview_direction = [0, 0, -1]\nhalf_angle_deg = 5",
     ));
-    assert!(m.contains("receivers[0].values") && m.contains("luminance"), "{m}");
+    assert!(
+        m.contains("receivers[0].values") && m.contains("luminance"),
+        "{m}"
+    );
     let scene = scene(&point_source_scene("cells = [2, 2]"));
     let o = RunOptions {
         estimator: Some(Estimator::Track),

@@ -346,3 +346,98 @@ fn the_hidden_receiver_faces_the_line_of_sight() {
     assert!(s.receivers["observer:front"].direct[0] > 0.0);
     assert_eq!(s.receivers["observer:back"].direct[0], 0.0);
 }
+
+/// E_ind of [`scene_text`]'s front observer, exactly: one bounce off the grey floor
+/// (ρ = 0.5, nothing else to reflect), ρ·E_floor/π seen by the eye's plane facing +x,
+/// ∫ L·(ω·x̂)·cos θ_floor/r² dA over the floor in front of the eye (x > 0), by 8 × 8
+/// Gauss–Legendre on 0.1 m panels. E_floor = I·cos γ/d² with I = 1000 cd below the
+/// luminaire.
+fn front_e_ind_lx() -> f64 {
+    let [lx, ly, lz] = LUMINAIRE;
+    let [_, _, ez] = EYE;
+    let integrand = |x: f64, y: f64| {
+        let d2 = (x - lx) * (x - lx) + (y - ly) * (y - ly) + lz * lz;
+        let e_floor = 1000.0 * lz / (d2 * d2.sqrt());
+        let r2 = x * x + y * y + ez * ez;
+        0.5 * e_floor / std::f64::consts::PI * (x * ez) / (r2 * r2)
+    };
+    let panel = 0.1;
+    let mut sum = 0.0;
+    for i in 0..100 {
+        for j in 0..200 {
+            let (x0, y0) = (i as f64 * panel, -10.0 + j as f64 * panel);
+            sum += panel * panel * cell_average(integrand, x0, x0 + panel, y0, y0 + panel);
+        }
+    }
+    sum
+}
+
+/// UGR's interval comes from E_ind's (UGR falls as E_ind grows, L and ω are exact):
+/// over 200 seeds it covers the exact UGR at its nominal 95 % within binomial error,
+/// and E_ind's z-scores against the exact value have an RMS near 1.
+#[test]
+fn the_ugr_interval_covers_the_exact_ugr() {
+    let scene = load(&scene_text(""));
+    let e_exact = front_e_ind_lx();
+    let seeds = 200;
+    let (mut covered, mut z2) = (0, 0.0);
+    let mut exact_ugr = f64::NAN;
+    for seed in 1..=seeds {
+        let s = run(&scene, 20_000, seed);
+        let o = observer(&s, "front");
+        exact_ugr = ugr::ugr(o.sum, e_exact).expect("a rating");
+        let (lo, hi) = (o.ugr_low.unwrap(), o.ugr_high.unwrap());
+        covered += (lo <= exact_ugr && exact_ugr <= hi) as u32;
+        let z = (o.e_ind_lx - e_exact) / o.e_ind_sigma_lx.unwrap();
+        z2 += z * z;
+    }
+    let rate = covered as f64 / seeds as f64;
+    let sd = libm::sqrt(0.95 * 0.05 / seeds as f64);
+    let z_rms = libm::sqrt(z2 / seeds as f64);
+    eprintln!(
+        "UGR {exact_ugr:.3} (E_ind {e_exact:.4} lx): covered {covered}/{seeds}, z RMS {z_rms:.3}"
+    );
+    assert!((rate - 0.95).abs() <= 3.0 * sd, "coverage {rate}");
+    // The RMS of 200 unit normals is 1 ± 0.05.
+    assert!((0.85..=1.15).contains(&z_rms), "z RMS {z_rms}");
+}
+
+/// `ugr_max` on observers: PASS well above the exact UGR, FAIL well below, and an
+/// observer who sees no luminaire (it is behind the eye) has no UGR: UNDECIDED and
+/// not reliable, whatever the budget.
+#[test]
+fn ugr_max_checks_pass_fail_and_stay_undecided_without_a_rating() {
+    let exact = {
+        let s = run(&load(&scene_text("")), 1000, 1);
+        ugr::ugr(observer(&s, "front").sum, front_e_ind_lx()).unwrap()
+    };
+    let requirement = |observer: &str, max: f64| {
+        format!("[[requirements]]\nname = \"{observer} {max}\"\nobserver = \"{observer}\"\nugr_max = {max}\n")
+    };
+    let extra = requirement("front", exact + 2.0)
+        + &requirement("front", exact - 2.0)
+        + &requirement("back", 30.0);
+    let s = run(&load(&scene_text(&extra)), 100_000, 5);
+    let v = s.verdicts.expect("verdicts");
+    let outcomes: Vec<_> = v.checks.iter().map(|c| (c.outcome, c.reliable)).collect();
+    use luxtally::stats::verdict::Outcome::{Fail, Pass, Undecided};
+    assert_eq!(
+        outcomes,
+        [(Pass, true), (Fail, true), (Undecided, false)],
+        "{v:?}"
+    );
+    let c = &v.checks[0];
+    assert_eq!(
+        (c.figure.as_str(), c.at_least, c.at_most),
+        ("ugr", None, Some(exact + 2.0))
+    );
+    assert_eq!(
+        (c.observer.as_deref(), c.receiver.as_str()),
+        (Some("front"), "observer:front")
+    );
+    assert!(
+        c.low < c.value && c.value < c.high && c.margin_sigma > 3.0,
+        "{c:?}"
+    );
+    assert_eq!(v.overall, Fail);
+}

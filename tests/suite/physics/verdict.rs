@@ -161,7 +161,10 @@ fn unreliable_sigma_decides_nothing() {
             .expect("ceiling check")
     };
     let (em, u0) = (check("em"), check("u0"));
-    assert!(u0.low >= u0.at_least.unwrap(), "the bounds alone would pass: {u0:?}");
+    assert!(
+        u0.low >= u0.at_least.unwrap(),
+        "the bounds alone would pass: {u0:?}"
+    );
     assert_eq!((u0.reliable, u0.outcome), (false, Outcome::Undecided));
     assert_eq!((em.reliable, em.outcome), (true, Outcome::Pass), "{em:?}");
     assert_eq!(v.overall, Outcome::Undecided);
