@@ -181,8 +181,13 @@ pub struct ReceiverSummary {
     #[serde(deserialize_with = "null_as_nan::f64")]
     pub dark_upper_bound: f64,
     /// The designer's figures over the cells: Ē, Emin, Emax, U0, g2 with intervals at
-    /// `[simulation] confidence` (docs/designers.md).
+    /// `[simulation] confidence` (docs/designers.md), leaving out `excluded_cells`.
     pub figures: Figures,
+    /// The cells (j·nu + i) whose centres lie in the areas of the receivers it
+    /// `exclude`s: in the arrays above, not in `figures` (nor in `mean`, `rel_error`,
+    /// which are over all cells).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub excluded_cells: Vec<usize>,
 }
 
 #[derive(Serialize, Deserialize, Default)]
@@ -325,20 +330,8 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
         .filter(|(c, _)| c.hits > 0)
         .map(|(_, &vov)| vov)
         .fold(0.0, f64::max);
-    let total = t.receiver_total(&state.scene.receivers, index);
-    let (mean_sigma, mean_vov) = figures::mean_and_sigma(cells, total, t.counts());
-    let confidence = state.scene.simulation.confidence;
-    let mut figures = figures::figures(&stats, mean_sigma, mean_vov, confidence);
-    if r.points {
-        figures.values = "point".into();
-    }
     let receivers = &state.scene.receivers;
-    if let Some(p) = (state.scene.modelling.iter()).find(|p| p.cylindrical == index) {
-        let (eh, eh_sigma, _) = figures::receiver_mean(t, receivers, p.horizontal);
-        let ratio = figures::modelling_ratio((stats.mean, mean_sigma), (eh, eh_sigma), confidence);
-        figures.modelling = Some(ratio);
-        figures.modelling_with = Some(receivers[p.horizontal].name.clone());
-    }
+    let figures = figures::receiver_figures(state.scene, t, index);
     let (quantity, unit) = (r.quantity.name(), r.quantity.unit());
     ReceiverSummary {
         quantity: quantity.into(),
@@ -367,6 +360,9 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
         dark_cells: stats.dark_cells,
         dark_upper_bound: stats.dark_bound,
         figures,
+        excluded_cells: (r.excluded_cells(receivers).iter().enumerate())
+            .filter_map(|(k, &x)| x.then_some(k))
+            .collect(),
     }
 }
 

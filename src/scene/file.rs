@@ -279,6 +279,9 @@ pub struct ReceiverFile {
     /// A cylindrical receiver's horizontal partner: its modelling ratio Ēz/Ēh.
     pub modelling_with: Option<String>,
     pub values: Option<ValuesName>,
+    /// Receivers whose areas this one's figures leave out (a task area inside its
+    /// surrounding).
+    pub exclude: Option<Vec<String>>,
 }
 
 /// `values = "cell_average" | "point"`: what a receiver's cells score.

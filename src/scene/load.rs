@@ -113,8 +113,10 @@ fn lights(
 /// The `[[receivers]]` entries, validated; names are unique.
 fn receivers(entries: Vec<ReceiverFile>, origin: &str) -> Result<Vec<Receiver>> {
     let mut receivers: Vec<Receiver> = Vec::new();
-    for (i, r) in entries.into_iter().enumerate() {
+    let mut excludes = Vec::new();
+    for (i, mut r) in entries.into_iter().enumerate() {
         let at = format!("{origin}: receivers[{i}]");
+        excludes.push(r.exclude.take().unwrap_or_default());
         let receiver = receiver(r, &at)?;
         if receivers.iter().any(|o| o.name == receiver.name) {
             return Err(Error::input(
@@ -124,7 +126,35 @@ fn receivers(entries: Vec<ReceiverFile>, origin: &str) -> Result<Vec<Receiver>> 
         }
         receivers.push(receiver);
     }
+    for (i, names) in excludes.into_iter().enumerate() {
+        let at = format!("{origin}: receivers[{i}].exclude");
+        receivers[i].exclude = exclusions(&names, &receivers, i, &at)?;
+    }
     Ok(receivers)
+}
+
+/// Receiver `i`'s `exclude` names as indices: other receivers, leaving some cell in.
+fn exclusions(names: &[String], receivers: &[Receiver], i: usize, at: &str) -> Result<Vec<usize>> {
+    let mut out = Vec::new();
+    for name in names {
+        let k = (receivers.iter().position(|r| &r.name == name))
+            .ok_or_else(|| Error::input(at, format!("no receiver named `{name}`")))?;
+        if k == i {
+            return Err(Error::input(at, "a receiver cannot exclude itself"));
+        }
+        out.push(k);
+    }
+    let r = Receiver {
+        exclude: out.clone(),
+        ..receivers[i].clone()
+    };
+    if r.included_cells(receivers).is_some_and(|c| c.is_empty()) {
+        return Err(Error::input(
+            at,
+            "leaves no cell in: every cell's centre is excluded",
+        ));
+    }
+    Ok(out)
 }
 
 fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
@@ -159,6 +189,7 @@ fn receiver(r: ReceiverFile, at: &str) -> Result<Receiver> {
         estimator,
         grid,
         points,
+        exclude: Vec::new(),
     })
 }
 

@@ -328,6 +328,9 @@ pub struct Receiver {
     /// `values = "point"`: each cell scores the value at its centre (next-event only),
     /// not its mean over the cell.
     pub points: bool,
+    /// `exclude`: the receivers (indices) whose areas its mean and figures leave out
+    /// ([`Receiver::excluded_cells`]).
+    pub exclude: Vec<usize>,
 }
 
 impl Receiver {
@@ -338,6 +341,42 @@ impl Receiver {
 
     pub fn cell_count(&self) -> usize {
         self.cells[0] as usize * self.cells[1] as usize
+    }
+
+    /// The receiver's (a, b) ∈ [0, 1)² coordinates of world point `p` projected onto
+    /// its plane along its normal, or None outside its area.
+    pub fn coordinates_of(&self, p: DVec3) -> Option<(f64, f64)> {
+        let n = self.u.cross(self.v);
+        let area = n.length();
+        let n = n / area;
+        let rel = p - self.corner;
+        let a = rel.dot(self.v.cross(n) / area);
+        let b = rel.dot(n.cross(self.u) / area);
+        ((0.0..1.0).contains(&a) && (0.0..1.0).contains(&b)).then_some((a, b))
+    }
+
+    /// Per cell (j·nu + i), whether its centre lies within one of the `exclude`d
+    /// receivers' areas (projected onto each along its normal); empty when it excludes
+    /// none.
+    pub fn excluded_cells(&self, receivers: &[Receiver]) -> Vec<bool> {
+        if self.exclude.is_empty() {
+            return Vec::new();
+        }
+        let [nu, nv] = self.cells;
+        (0..nu * nv)
+            .map(|k| {
+                let (i, j) = ((k % nu) as f64 + 0.5, (k / nu) as f64 + 0.5);
+                let centre = self.corner + self.u * (i / nu as f64) + self.v * (j / nv as f64);
+                (self.exclude.iter()).any(|&e| receivers[e].coordinates_of(centre).is_some())
+            })
+            .collect()
+    }
+
+    /// The cells its mean and figures are over (local indices): all but the excluded;
+    /// None for all.
+    pub fn included_cells(&self, receivers: &[Receiver]) -> Option<Vec<usize>> {
+        let excluded = self.excluded_cells(receivers);
+        (!excluded.is_empty()).then(|| (0..excluded.len()).filter(|&k| !excluded[k]).collect())
     }
 }
 

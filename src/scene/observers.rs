@@ -164,5 +164,6 @@ pub fn hidden_receiver(name: String, eye: DVec3, look: DVec3) -> Receiver {
         estimator: Estimator::NextEvent,
         grid: None,
         points: false,
+        exclude: Vec::new(),
     }
 }

@@ -18,7 +18,7 @@
 //!   which covers, is the figure to quote.
 
 use super::{widened_sigma, CellStatus, ReceiverStats};
-use crate::scene::Receiver;
+use crate::scene::{Receiver, Scene};
 use crate::tally::{CellSums, Counts, Tallies};
 use serde::{Deserialize, Serialize};
 
@@ -156,21 +156,32 @@ fn z_two_sided(confidence: f64, k: usize) -> f64 {
 /// The σ and VOV of a receiver's mean over its cells (`ReceiverStats::mean`), from its
 /// total slot and its cells. The VOV is that of the photons' variance, scaled by its
 /// share of the whole (the direct light's replicates are many and even).
-pub fn mean_and_sigma(cells: &[CellSums], total: &CellSums, counts: Counts) -> (f64, f64) {
+pub fn mean_and_sigma(
+    cells: &[CellSums],
+    included: Option<&[usize]>,
+    total: &CellSums,
+    counts: Counts,
+) -> (f64, f64) {
     if counts.dark {
         return (0.0, 0.0);
     }
-    if cells.iter().all(|c| c.hits == 0) {
+    let counted = || -> Box<dyn Iterator<Item = &CellSums>> {
+        match included {
+            Some(k) => Box::new(k.iter().map(|&k| &cells[k])),
+            None => Box::new(cells.iter()),
+        }
+    };
+    if counted().all(|c| c.hits == 0) {
         // Nothing scored: the mean reads 0 with an unknown error, as its cells do.
         return (f64::NAN, 1.0);
     }
-    let n = cells.len() as f64;
+    let n = counted().count() as f64;
     let photons = total.photon_moments(counts);
     let (_, photon_var) = photons.mean_and_variance();
     let direct_var: f64 = if counts.direct_replicates == 0 {
         0.0
     } else {
-        (cells.iter())
+        counted()
             .map(|c| c.direct_moments(counts).mean_and_variance().1)
             .sum::<f64>()
             / (n * n)
@@ -252,14 +263,44 @@ pub fn figures(stats: &ReceiverStats, mean_sigma: f64, mean_vov: f64, confidence
     f
 }
 
-/// Receiver `k`'s mean over its cells with its σ and VOV ([`mean_and_sigma`]).
-pub fn receiver_mean(tallies: &Tallies, receivers: &[Receiver], k: usize) -> (f64, f64, f64) {
+/// Receiver `k`'s statistics over the cells its figures count (all but its excluded
+/// cells), with its mean's σ and VOV ([`mean_and_sigma`]).
+pub fn figure_stats(
+    tallies: &Tallies,
+    receivers: &[Receiver],
+    k: usize,
+) -> (ReceiverStats, f64, f64) {
     let cells = tallies.receiver_cells(receivers, k);
     let total = tallies.receiver_total(receivers, k);
     let counts = tallies.counts();
-    let stats = super::receiver_stats(cells, receivers[k].cells, counts, None);
-    let (sigma, vov) = mean_and_sigma(cells, total, counts);
-    (stats.mean, sigma, vov)
+    let included = receivers[k].included_cells(receivers);
+    let included = included.as_deref();
+    let stats = super::receiver_stats(cells, receivers[k].cells, counts, included);
+    let (sigma, vov) = mean_and_sigma(cells, included, total, counts);
+    (stats, sigma, vov)
+}
+
+/// Receiver `k`'s figures, at the scene's confidence: over its counted cells (the
+/// cell indices are the receiver's own), labelled `point` for a point receiver, with
+/// the modelling ratio where it has a `modelling_with` partner.
+pub fn receiver_figures(scene: &Scene, tallies: &Tallies, k: usize) -> Figures {
+    let receivers = &scene.receivers;
+    let (counted, mean_sigma, mean_vov) = figure_stats(tallies, receivers, k);
+    let confidence = scene.simulation.confidence;
+    let mut f = figures(&counted, mean_sigma, mean_vov, confidence);
+    if let Some(included) = receivers[k].included_cells(receivers) {
+        (f.min_cell, f.max_cell) = (included[f.min_cell], included[f.max_cell]);
+    }
+    if receivers[k].points {
+        f.values = "point".into();
+    }
+    if let Some(p) = (scene.modelling.iter()).find(|p| p.cylindrical == k) {
+        let (eh, eh_sigma, _) = figure_stats(tallies, receivers, p.horizontal);
+        let ratio = modelling_ratio((counted.mean, mean_sigma), (eh.mean, eh_sigma), confidence);
+        f.modelling = Some(ratio);
+        f.modelling_with = Some(receivers[p.horizontal].name.clone());
+    }
+    f
 }
 
 /// The modelling ratio Ēz/Ēh from the two means and their σ, its interval at

@@ -279,6 +279,7 @@ mod tests {
             estimator: Estimator::Auto,
             grid: None,
             points: false,
+            exclude: Vec::new(),
         }]
     }
 

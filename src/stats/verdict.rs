@@ -24,8 +24,7 @@
 //!   σ, cannot end a run on a lucky bound.
 
 use super::figures::{
-    judged_sigmas, mean_and_sigma, ratio_interval, receiver_mean, unbounded_ratio_interval, Cells,
-    Figure,
+    figure_stats, judged_sigmas, ratio_interval, unbounded_ratio_interval, Cells, Figure,
 };
 use super::{receiver_stats, ugr, CellStatus, MAX_RELIABLE_VOV};
 use crate::scene::{Check, FigureName, Limit, Requirement, Scene, Subject};
@@ -249,9 +248,9 @@ struct Mean {
 
 impl Mean {
     fn of(scene: &Scene, tallies: &Tallies, k: usize) -> Mean {
-        let (value, sigma, vov) = receiver_mean(tallies, &scene.receivers, k);
+        let (stats, sigma, vov) = figure_stats(tallies, &scene.receivers, k);
         Mean {
-            value,
+            value: stats.mean,
             sigma,
             reliable: vov <= MAX_RELIABLE_VOV,
         }
@@ -276,23 +275,17 @@ struct ReceiverBounds {
 
 impl ReceiverBounds {
     fn new(scene: &Scene, tallies: &Tallies, k: usize) -> ReceiverBounds {
-        let cells = tallies.receiver_cells(&scene.receivers, k);
-        let total = tallies.receiver_total(&scene.receivers, k);
-        let counts = tallies.counts();
-        let stats = receiver_stats(cells, scene.receivers[k].cells, counts, None);
+        let (stats, sigma, vov) = figure_stats(tallies, &scene.receivers, k);
         let horizontal = (scene.modelling.iter())
             .find(|p| p.cylindrical == k)
             .map(|p| Mean::of(scene, tallies, p.horizontal));
         ReceiverBounds {
             sigma: judged_sigmas(&stats),
             cells_reliable: stats.status.iter().all(|s| *s == CellStatus::Reliable),
-            mean: {
-                let (sigma, vov) = mean_and_sigma(cells, total, counts);
-                Mean {
-                    value: stats.mean,
-                    sigma,
-                    reliable: vov <= MAX_RELIABLE_VOV,
-                }
+            mean: Mean {
+                value: stats.mean,
+                sigma,
+                reliable: vov <= MAX_RELIABLE_VOV,
             },
             values: stats.values,
             horizontal,

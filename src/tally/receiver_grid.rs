@@ -196,6 +196,7 @@ mod tests {
             estimator: Estimator::Track,
             grid: None,
             points: false,
+            exclude: Vec::new(),
         }
     }
 

@@ -129,7 +129,12 @@ impl<'a> Tracer<'a> {
             receiver_slack: 1e-5 * scene_scale as f64,
             any_connects,
             lambert_track,
-            total_spans: TotalSpan::of(&receivers),
+            total_spans: TotalSpan::of(
+                &receivers,
+                (scene.receivers.iter())
+                    .map(|r| r.excluded_cells(&scene.receivers))
+                    .collect(),
+            ),
             receivers,
         }
     }
@@ -417,27 +422,40 @@ impl<'a> Tracer<'a> {
 
 /// Where a receiver's per-history total is tallied: its cells `first..end` and the slot
 /// after every receiver's cells that holds the histories of its mean over them.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct TotalSpan {
     pub first: u32,
     pub end: u32,
     pub slot: u32,
-    /// 1 / cells: a history's contribution to the mean over the cells.
+    /// 1 / cells counted: a history's contribution to the mean over them.
     pub per_cell: f64,
+    /// Per cell, whether the mean leaves it out (`exclude`); empty: none.
+    pub excluded: std::sync::Arc<[bool]>,
 }
 
 impl TotalSpan {
-    /// The spans of `receivers`, whose total slots follow all their cells in order.
-    pub fn of(receivers: &[ReceiverGrid]) -> Vec<TotalSpan> {
+    /// The spans of `receivers`, whose total slots follow all their cells in order;
+    /// `excluded` per receiver as [`crate::scene::Receiver::excluded_cells`].
+    pub fn of(receivers: &[ReceiverGrid], excluded: Vec<Vec<bool>>) -> Vec<TotalSpan> {
         let cells: u32 = receivers.iter().map(|r| r.cell_count() as u32).sum();
-        (receivers.iter().enumerate())
-            .map(|(k, r)| TotalSpan {
-                first: r.first_cell,
-                end: r.first_cell + r.cell_count() as u32,
-                slot: cells + k as u32,
-                per_cell: 1.0 / r.cell_count() as f64,
+        (receivers.iter().zip(excluded).enumerate())
+            .map(|(k, (r, excluded))| {
+                let counted = r.cell_count() - excluded.iter().filter(|&&x| x).count();
+                TotalSpan {
+                    first: r.first_cell,
+                    end: r.first_cell + r.cell_count() as u32,
+                    slot: cells + k as u32,
+                    per_cell: 1.0 / counted as f64,
+                    excluded: excluded.into(),
+                }
             })
             .collect()
+    }
+
+    /// Whether global cell `cell` of this span counts in its mean.
+    #[inline]
+    fn counts(&self, cell: u32) -> bool {
+        self.excluded.is_empty() || !self.excluded[(cell - self.first) as usize]
     }
 }
 
@@ -468,6 +486,11 @@ fn fold_histories(
         }
         add_history(acc, out, cell, x, hits);
         let span = spans.partition_point(|s| s.end <= cell);
+        // An excluded cell adds nothing to its receiver's mean.
+        let (x, hits) = match spans.get(span) {
+            Some(s) if !s.counts(cell) => (0.0, 0),
+            _ => (x, hits),
+        };
         match &mut total {
             Some((o, s, sum, h)) if *o == offset && *s == span => {
                 *sum += x;
@@ -475,18 +498,33 @@ fn fold_histories(
             }
             _ => {
                 if let Some((_, s, sum, h)) = total {
-                    add_history(acc, out, spans[s].slot, sum * spans[s].per_cell, h);
+                    add_total(acc, out, &spans[s], sum, h);
                 }
                 total = (span < spans.len()).then_some((offset, span, x, hits));
             }
         }
     }
     if let Some((_, s, sum, h)) = total {
-        add_history(acc, out, spans[s].slot, sum * spans[s].per_cell, h);
+        add_total(acc, out, &spans[s], sum, h);
     }
     out.sort_by_key(|p| p.cell);
     for p in out.iter_mut() {
         *p = std::mem::take(&mut acc[p.cell as usize]);
+    }
+}
+
+/// One history's mean over a receiver's counted cells, `sum` from `hits` scores (none
+/// when all its scores fell in excluded cells).
+#[inline]
+fn add_total(
+    acc: &mut Vec<CellPartial>,
+    out: &mut Vec<CellPartial>,
+    span: &TotalSpan,
+    sum: f64,
+    hits: u64,
+) {
+    if hits > 0 {
+        add_history(acc, out, span.slot, sum * span.per_cell, hits);
     }
 }
 
@@ -557,12 +595,14 @@ mod tests {
                 end: 4,
                 slot: 6,
                 per_cell: 0.25,
+                excluded: Default::default(),
             },
             TotalSpan {
                 first: 4,
                 end: 6,
                 slot: 7,
                 per_cell: 0.5,
+                excluded: Default::default(),
             },
         ];
         // Photon 0 scores A twice (cells 1, 3) and B once; photon 1 scores A once.

@@ -216,6 +216,7 @@ mod tests {
             estimator: Estimator::Track,
             grid: None,
             points: false,
+            exclude: Vec::new(),
         };
         let grid = ReceiverGrid::new(&desk, DVec3::ZERO, 0, Estimator::Track);
         let mut rng = crate::rng::aux_stream(11);

@@ -32,6 +32,7 @@ mod physics {
     mod physics;
     mod points;
     mod render;
+    mod surroundings;
     mod ugr;
     mod verdict;
 }
