@@ -11,6 +11,8 @@
 
 use super::ugr::{position_index, ugr, MAX_H_OVER_R, MAX_T_OVER_R};
 use crate::photometry::{Opening, Photometry};
+use crate::raster::canvas::Canvas;
+use crate::raster::encode_rgb_png;
 use crate::{Error, Result};
 use glam::DVec3;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -475,7 +477,84 @@ fn room_row(
     }
 }
 
-/// PLACEHOLDER
-pub fn plot_png(_t: &Table) -> Result<Vec<u8>> {
-    Err(Error::Unsupported("plot not yet".into()))
+// ---------------------------------------------------------------------------------------
+// The plot
+
+const PANEL: (f64, f64) = (420.0, 320.0);
+/// Plot area inside a panel: left, top, right, bottom margins (room for labels).
+const MARGIN: [f64; 4] = [52.0, 40.0, 16.0, 44.0];
+const COLOURS: [[u8; 3]; 4] = [
+    [31, 119, 180],
+    [214, 39, 40],
+    [44, 160, 44],
+    [148, 103, 189],
+];
+const INK: [u8; 3] = [0, 0, 0];
+const GRID: [u8; 3] = [210, 210, 210];
+
+/// The plot of `t`: UGR (70/50/20) against Y/H, one line per X, crosswise on the left,
+/// endwise on the right, as PNG bytes.
+pub fn plot_png(t: &Table) -> Result<Vec<u8>> {
+    let values = t
+        .rows
+        .iter()
+        .flat_map(|r| [r.ugr[0][0], r.ugr[1][0]])
+        .flatten();
+    let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    });
+    let (lo, hi) = if lo <= hi {
+        (lo.floor(), hi.ceil().max(lo.floor() + 1.0))
+    } else {
+        (0.0, 1.0)
+    };
+    let mut c = Canvas::new((2.0 * PANEL.0) as usize, PANEL.1 as usize);
+    for (v, view) in View::BOTH.iter().enumerate() {
+        plot_panel(&mut c, t, v, *view, (lo, hi));
+    }
+    encode_rgb_png(c.width, c.height, &c.rgb)
+}
+
+/// One view's panel at its place in `c`, UGR axis `lo`…`hi`.
+fn plot_panel(c: &mut Canvas, t: &Table, v: usize, view: View, (lo, hi): (f64, f64)) {
+    let left = v as f64 * PANEL.0;
+    let [ml, mt, mr, mb] = MARGIN;
+    let (x0, x1) = (left + ml, left + PANEL.0 - mr);
+    let (y0, y1) = (PANEL.1 - mb, mt);
+    let sx = |y_h: f64| x0 + (y_h - 2.0) / 10.0 * (x1 - x0);
+    let sy = |u: f64| y0 + (u - lo) / (hi - lo) * (y1 - y0);
+    let step = if hi - lo > 8.0 { 2.0 } else { 1.0 };
+    let mut u = lo;
+    while u <= hi + 1e-9 {
+        c.path(&[(x0, sy(u)), (x1, sy(u))], GRID, 1.0, None);
+        c.text(left + 8.0, sy(u) - 5.0, &format!("{u}"), INK);
+        u += step;
+    }
+    for y_h in [2.0, 3.0, 4.0, 6.0, 8.0, 12.0] {
+        c.path(&[(sx(y_h), y0), (sx(y_h), y1)], GRID, 1.0, None);
+        c.text_centred(sx(y_h), y0 + 12.0, &format!("{y_h}"), INK);
+    }
+    c.path(&[(x0, y1), (x0, y0), (x1, y0)], INK, 1.0, None);
+    c.text_centred((x0 + x1) / 2.0, y0 + 30.0, "Y/H", INK);
+    let title = format!("UGR {} 70/50/20", view.as_str().to_uppercase());
+    c.text(x0, 12.0, &title, INK);
+    for (k, x_h) in [2.0, 4.0, 8.0, 12.0].into_iter().enumerate() {
+        let pts: Vec<(f64, f64)> = (t.rows.iter())
+            .filter(|r| r.x_h == x_h)
+            .filter_map(|r| r.ugr[v][0].map(|u| (sx(r.y_h), sy(u))))
+            .collect();
+        c.path(&pts, COLOURS[k], 2.0, None);
+        for &(x, y) in &pts {
+            c.dot(x, y, COLOURS[k], 6.0);
+        }
+        let lx = x1 - 70.0;
+        let ly = y0 - 20.0 - 16.0 * (3 - k) as f64;
+        c.path(
+            &[(lx, ly + 5.0), (lx + 16.0, ly + 5.0)],
+            COLOURS[k],
+            2.0,
+            None,
+        );
+        c.text(lx + 22.0, ly, &format!("X={x_h}H"), INK);
+    }
 }
