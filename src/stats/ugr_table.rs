@@ -182,21 +182,24 @@ pub struct TransferFactors {
     pub ceiling_walls: f64,
 }
 
-/// The transfer factors of `e` for reflectances `r`: incident flux Φ = Φ₀ + Φ·diag(ρ)·F,
-/// so Φ = Φ₀·(I − diag(ρ)F)⁻¹, whose wall column solves (I − diag(ρ)F)·t = e_walls.
-pub fn transfer_factors(e: &Enclosure, r: Reflectances) -> TransferFactors {
+/// The flux finally arriving on each surface of `e` (reflectances `r`) when a unit first
+/// arrives on surface `first`: Φ = Φ₀ + Φ·diag(ρ)·F (Φ a row), so Φ solves
+/// (I − diag(ρ)F)ᵀ·Φ = e_first.
+pub fn incident_flux(e: &Enclosure, r: Reflectances, first: usize) -> [f64; 3] {
     let rho = [r.floor, r.walls, r.ceiling];
-    let mut m = [[0.0; 3]; 3];
-    for (i, row) in m.iter_mut().enumerate() {
-        for (j, v) in row.iter_mut().enumerate() {
-            *v = f64::from(u8::from(i == j)) - rho[i] * e.f[i][j];
-        }
-    }
-    let t = solve3(m, [0.0, 1.0, 0.0]);
+    let m: [[f64; 3]; 3] = std::array::from_fn(|j| {
+        std::array::from_fn(|i| f64::from(u8::from(i == j)) - rho[i] * e.f[i][j])
+    });
+    solve3(m, std::array::from_fn(|k| f64::from(u8::from(k == first))))
+}
+
+/// The transfer factors of `e` for reflectances `r` ([`incident_flux`]'s wall share).
+pub fn transfer_factors(e: &Enclosure, r: Reflectances) -> TransferFactors {
+    let to_walls = |first| incident_flux(e, r, first)[WALLS];
     TransferFactors {
-        floor_walls: t[FLOOR],
-        walls_walls_minus_1: t[WALLS] - 1.0,
-        ceiling_walls: t[CEILING],
+        floor_walls: to_walls(FLOOR),
+        walls_walls_minus_1: to_walls(WALLS) - 1.0,
+        ceiling_walls: to_walls(CEILING),
     }
 }
 
@@ -248,22 +251,26 @@ pub struct FloorTable {
 }
 
 impl FloorTable {
-    /// `p` turned by `view`, as fractions of `rated_lm` (midpoint rule per cell:
-    /// dω = sec²a·sec²b/(1 + tan²a + tan²b)^{3/2} da db).
+    /// `p` turned by `view`, as fractions of `rated_lm`: each cell's intensity at its
+    /// centre times its exact solid angle ([`corner_solid_angle`]), so a uniform source
+    /// is integrated exactly.
     pub fn new(p: &Photometry, view: View, rated_lm: f64) -> FloorTable {
         let n = FLOOR_CELLS;
         let step = PI / n as f64;
-        let mid = |k: usize| -FRAC_PI_2 + (k as f64 + 0.5) * step;
+        let node = |k: usize| -FRAC_PI_2 + k as f64 * step;
+        let corner: Vec<f64> = (0..=n)
+            .flat_map(|i| (0..=n).map(move |j| corner_solid_angle(node(i), node(j))))
+            .collect();
+        let c = |i: usize, j: usize| corner[i * (n + 1) + j];
         let mut sum = vec![0.0; (n + 1) * (n + 1)];
         for i in 0..n {
-            let (ta, ca) = (mid(i).tan(), mid(i).cos());
+            let ta = (node(i) + step / 2.0).tan();
             let mut row = 0.0;
             for j in 0..n {
-                let (tb, cb) = (mid(j).tan(), mid(j).cos());
-                let q = 1.0 + ta * ta + tb * tb;
-                let d_omega = step * step / (ca * ca * cb * cb * q * q.sqrt());
+                let tb = (node(j) + step / 2.0).tan();
+                let omega = c(i + 1, j + 1) - c(i, j + 1) - c(i + 1, j) + c(i, j);
                 let dir = view.to_luminaire(DVec3::new(ta, tb, -1.0));
-                row += p.intensity_toward_cd(dir) * d_omega / rated_lm;
+                row += p.intensity_toward_cd(dir) * omega / rated_lm;
                 sum[(i + 1) * (n + 1) + j + 1] = sum[i * (n + 1) + j + 1] + row;
             }
         }
@@ -295,6 +302,15 @@ impl FloorTable {
         let (b0, b1) = ((y0 / H_M).atan(), (y1 / H_M).atan());
         self.below(a1, b1) - self.below(a0, b1) - self.below(a1, b0) + self.below(a0, b0)
     }
+}
+
+/// Solid angle of the plane's rectangle between the foot and the point at angles
+/// (a, b) (x = H·tan a, y = H·tan b), signed: atan(xy/(H·√(H² + x² + y²))), in the form
+/// that stays finite at a or b = ±90°.
+fn corner_solid_angle(a: f64, b: f64) -> f64 {
+    let ((sa, ca), (sb, cb)) = (a.sin_cos(), b.sin_cos());
+    let den = (ca * ca * cb * cb + sa * sa * cb * cb + ca * ca * sb * sb).sqrt();
+    (sa * sb).atan2(den)
 }
 
 /// Direct flux on floor, walls and ceiling per luminaire, as fractions of the rated lamp
@@ -556,5 +572,56 @@ fn plot_panel(c: &mut Canvas, t: &Table, v: usize, view: View, (lo, hi): (f64, f
             None,
         );
         c.text(lx + 22.0, ly, &format!("X={x_h}H"), INK);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn arrays_have_cie_190s_luminaire_counts() {
+        // CIE 190 Table 3: 4H × 8H holds 32 at SHR 1; the catalogue's 0.25 gives 16 × 32.
+        assert_eq!(array(4.0, 8.0, 1.0).len(), 32);
+        assert_eq!(array(4.0, 8.0, 0.25).len(), 512);
+        assert_eq!(
+            array(2.0, 2.0, 1.0),
+            [(-1.0, 1.0), (1.0, 1.0), (-1.0, 3.0), (1.0, 3.0)]
+        );
+    }
+
+    #[test]
+    fn projected_area_adds_the_visible_luminous_sides() {
+        let box_ = Opening::Rectangle {
+            length_m: 1.0,
+            width_m: 0.5,
+        };
+        let down = DVec3::new(0.0, 0.0, -1.0);
+        assert_eq!(projected_area_m2(box_, 0.1, down), 0.5);
+        // Horizontally along x: the 0.5 × 0.1 end face only.
+        assert!((projected_area_m2(box_, 0.1, DVec3::X) - 0.05).abs() < 1e-15);
+        let disc = Opening::Disc { diameter_m: 0.2 };
+        let u = DVec3::new(0.6, 0.0, -0.8);
+        let expected = disc.area_m2() * 0.8 + 0.1 * 0.2 * 0.6;
+        assert!((projected_area_m2(disc, 0.1, u) - expected).abs() < 1e-15);
+        assert_eq!(projected_area_m2(Opening::Point, 0.1, u), 0.0);
+    }
+
+    #[test]
+    fn corner_solid_angles_are_finite_at_the_horizon() {
+        // A quadrant of the plane below subtends π/2; the form at ±90° stays exact.
+        let quadrant = corner_solid_angle(FRAC_PI_2, FRAC_PI_2);
+        assert!((quadrant - FRAC_PI_2).abs() < 1e-15);
+        let (x, y) = (0.7f64, 1.3f64);
+        let direct = (x * y / (1.0 + x * x + y * y).sqrt()).atan();
+        assert!((corner_solid_angle(x.atan(), y.atan()) - direct).abs() < 1e-15);
+    }
+
+    #[test]
+    fn labels_and_the_flux_correction() {
+        assert_eq!(REFLECTANCES[0].label(), "70/50/20");
+        assert_eq!(REFLECTANCES[4].label(), "30/30/20");
+        assert_eq!(flux_correction(1000.0), 0.0);
+        assert!((flux_correction(10_000.0) - 8.0).abs() < 1e-12);
     }
 }

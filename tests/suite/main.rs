@@ -32,6 +32,7 @@ mod physics {
     mod physics;
     mod render;
     mod ugr;
+    mod ugr_table;
     mod verdict;
 }
 
