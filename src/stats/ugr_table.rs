@@ -124,11 +124,11 @@ pub fn parallel_rectangles(a: f64, b: f64, c: f64) -> f64 {
     let (x, y) = (a / c, b / c);
     let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
     2.0 / (PI * x * y)
-        * (0.5 * ((1.0 + x * x) * (1.0 + y * y) / (1.0 + x * x + y * y)).ln()
-            + x * sy * (x / sy).atan()
-            + y * sx * (y / sx).atan()
-            - x * x.atan()
-            - y * y.atan())
+        * (0.5 * libm::log((1.0 + x * x) * (1.0 + y * y) / (1.0 + x * x + y * y))
+            + x * sy * libm::atan(x / sy)
+            + y * sx * libm::atan(y / sx)
+            - x * libm::atan(x)
+            - y * libm::atan(y))
 }
 
 /// Form factor from a rectangle of `width` to a perpendicular one of `height`, sharing
@@ -137,10 +137,11 @@ pub fn perpendicular_rectangles(common: f64, width: f64, height: f64) -> f64 {
     let (w, h) = (width / common, height / common);
     let (w2, h2) = (w * w, h * h);
     let s = (w2 + h2).sqrt();
-    let log = ((1.0 + w2) * (1.0 + h2) / (1.0 + w2 + h2)).ln()
-        + w2 * (w2 * (1.0 + w2 + h2) / ((1.0 + w2) * (w2 + h2))).ln()
-        + h2 * (h2 * (1.0 + h2 + w2) / ((1.0 + h2) * (h2 + w2))).ln();
-    (w * (1.0 / w).atan() + h * (1.0 / h).atan() - s * (1.0 / s).atan() + 0.25 * log) / (PI * w)
+    let log = libm::log((1.0 + w2) * (1.0 + h2) / (1.0 + w2 + h2))
+        + w2 * libm::log(w2 * (1.0 + w2 + h2) / ((1.0 + w2) * (w2 + h2)))
+        + h2 * libm::log(h2 * (1.0 + h2 + w2) / ((1.0 + h2) * (h2 + w2)));
+    (w * libm::atan(1.0 / w) + h * libm::atan(1.0 / h) - s * libm::atan(1.0 / s) + 0.25 * log)
+        / (PI * w)
 }
 
 /// Surfaces of the enclosure, in this order.
@@ -264,10 +265,10 @@ impl FloorTable {
         let c = |i: usize, j: usize| corner[i * (n + 1) + j];
         let mut sum = vec![0.0; (n + 1) * (n + 1)];
         for i in 0..n {
-            let ta = (node(i) + step / 2.0).tan();
+            let ta = libm::tan(node(i) + step / 2.0);
             let mut row = 0.0;
             for j in 0..n {
-                let tb = (node(j) + step / 2.0).tan();
+                let tb = libm::tan(node(j) + step / 2.0);
                 let omega = c(i + 1, j + 1) - c(i, j + 1) - c(i + 1, j) + c(i, j);
                 let dir = view.to_luminaire(DVec3::new(ta, tb, -1.0));
                 row += p.intensity_toward_cd(dir) * omega / rated_lm;
@@ -298,8 +299,8 @@ impl FloorTable {
     /// The fraction on the floor rectangle x ∈ [x0, x1], y ∈ [y0, y1] (m, relative to the
     /// luminaire's foot, H_M below it).
     pub fn on(&self, [x0, x1]: [f64; 2], [y0, y1]: [f64; 2]) -> f64 {
-        let (a0, a1) = ((x0 / H_M).atan(), (x1 / H_M).atan());
-        let (b0, b1) = ((y0 / H_M).atan(), (y1 / H_M).atan());
+        let (a0, a1) = (libm::atan(x0 / H_M), libm::atan(x1 / H_M));
+        let (b0, b1) = (libm::atan(y0 / H_M), libm::atan(y1 / H_M));
         self.below(a1, b1) - self.below(a0, b1) - self.below(a1, b0) + self.below(a0, b0)
     }
 }
@@ -308,9 +309,9 @@ impl FloorTable {
 /// (a, b) (x = H·tan a, y = H·tan b), signed: atan(xy/(H·√(H² + x² + y²))), in the form
 /// that stays finite at a or b = ±90°.
 fn corner_solid_angle(a: f64, b: f64) -> f64 {
-    let ((sa, ca), (sb, cb)) = (a.sin_cos(), b.sin_cos());
+    let ((sa, ca), (sb, cb)) = (libm::sincos(a), libm::sincos(b));
     let den = (ca * ca * cb * cb + sa * sa * cb * cb + ca * ca * sb * sb).sqrt();
-    (sa * sb).atan2(den)
+    libm::atan2(sa * sb, den)
 }
 
 /// Direct flux on floor, walls and ceiling per luminaire, as fractions of the rated lamp
@@ -355,7 +356,7 @@ pub fn rated_flux_lm(p: &Photometry) -> f64 {
 
 /// What turns the 1000 lm table into the file's: 8·log10(Φ/1000) (CIE 190 eq. 2).
 pub fn flux_correction(flux_lm: f64) -> f64 {
-    8.0 * (flux_lm / REFERENCE_FLUX_LM).log10()
+    8.0 * libm::log10(flux_lm / REFERENCE_FLUX_LM)
 }
 
 /// The luminous area seen from unit direction `u` (luminaire frame, towards the eye), m²:
@@ -367,8 +368,8 @@ pub fn projected_area_m2(opening: Opening, height_m: f64, u: DVec3) -> f64 {
     let sides = match opening {
         Opening::Point => 0.0,
         Opening::Rectangle { length_m, width_m } => width_m * u.x.abs() + length_m * u.y.abs(),
-        Opening::Disc { diameter_m } => diameter_m * u.x.hypot(u.y),
-        Opening::Ellipse { length_m, width_m } => (length_m * u.y).hypot(width_m * u.x),
+        Opening::Disc { diameter_m } => diameter_m * libm::hypot(u.x, u.y),
+        Opening::Ellipse { length_m, width_m } => libm::hypot(length_m * u.y, width_m * u.x),
     };
     bottom + height_m.max(0.0) * sides
 }
@@ -377,14 +378,14 @@ pub fn projected_area_m2(opening: Opening, height_m: f64, u: DVec3) -> f64 {
 /// and ω = A_proj/r², so L²ω = I²/(A_proj·r²) ([`projected_area_m2`]). Luminaires
 /// outside the position index's field or beyond [`MAX_GAMMA_DEG`] count 0.
 pub fn glare_sum(p: &Photometry, view: View, positions: &[(f64, f64)], scale: f64) -> f64 {
-    let max_tan_gamma = MAX_GAMMA_DEG.to_radians().tan();
+    let max_tan_gamma = libm::tan(MAX_GAMMA_DEG.to_radians());
     let (look, up) = (DVec3::Y, DVec3::Z);
     positions
         .iter()
         .filter(|&&(t, r)| {
             H_M / r <= MAX_H_OVER_R
                 && t.abs() / r <= MAX_T_OVER_R
-                && t.hypot(r) / H_M <= max_tan_gamma
+                && libm::hypot(t, r) / H_M <= max_tan_gamma
         })
         .map(|&(t, r)| {
             let to_lum = DVec3::new(t, r, H_M);
@@ -613,8 +614,8 @@ mod tests {
         let quadrant = corner_solid_angle(FRAC_PI_2, FRAC_PI_2);
         assert!((quadrant - FRAC_PI_2).abs() < 1e-15);
         let (x, y) = (0.7f64, 1.3f64);
-        let direct = (x * y / (1.0 + x * x + y * y).sqrt()).atan();
-        assert!((corner_solid_angle(x.atan(), y.atan()) - direct).abs() < 1e-15);
+        let direct = libm::atan(x * y / (1.0 + x * x + y * y).sqrt());
+        assert!((corner_solid_angle(libm::atan(x), libm::atan(y)) - direct).abs() < 1e-15);
     }
 
     #[test]

@@ -87,6 +87,13 @@ fn text_lines(t: &Table, file: &str, rated_lm: f64) -> Vec<String> {
         let room = format!("{}H   {}H", row.x_h, row.y_h);
         lines.push(format!("{room:<10} {}   {}", values(0), values(1)));
     }
+    let mut values = t.rows.iter().flat_map(|r| r.ugr.iter().flatten()).flatten();
+    if values.any(|&u| u < 10.0) {
+        lines.push(
+            "values below 10 are printed as computed (AGi32 prints them as 10, Relux as <10)"
+                .into(),
+        );
+    }
     let corr = ugr_table::flux_correction(rated_lm);
     lines.push(format!(
         "flux correction for the file's {rated_lm:.0} lm: {corr:+.1} (8·log10(Φ/1000), add to every value)"
