@@ -16,7 +16,7 @@
 //! benchmarks.
 //!
 //! Layering: each module uses only modules before it in this order, never one after
-//! it (no import cycles): `error`, `rng`, `sampling`, `raster` (bitmap font, PNG
+//! it (no import cycles): `error`, `rng`, `sampling`, `raster` (bitmap font, canvas, PNG
 //! encoder, palettes, quantile), `criteria` (the stop criteria of the scene file, the
 //! command line and the run), `input` (scene-file entries read with their key path,
 //! value checks) → `photometry` → `light` → `surface` → `scene` → `accel` → `tally` →

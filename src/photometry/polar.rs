@@ -5,8 +5,9 @@
 //! the interpolant (every 0.5°), not just the table's nodes.
 
 use super::Photometry;
+use crate::raster::canvas::{Canvas, SCALE};
 use crate::raster::encode_rgb_png;
-use crate::raster::font::{draw_text, text_width};
+use crate::raster::font::text_width;
 use crate::Result;
 
 /// Curves in cd/klm at `gamma_deg`, one per half-plane.
@@ -61,7 +62,6 @@ const WIDTH: usize = 480;
 const HEIGHT: usize = 510;
 const RADIUS: f64 = 200.0;
 const CENTRE: (f64, f64) = (240.0, 265.0);
-const SCALE: usize = 2;
 const RED: [u8; 3] = [200, 30, 30];
 const BLUE: [u8; 3] = [30, 70, 210];
 const GRID: [u8; 3] = [200, 200, 200];
@@ -79,55 +79,6 @@ pub fn ring_step(max: f64) -> f64 {
         .map(|m| m * decade)
         .find(|&s| s >= raw * (1.0 - 1e-12))
         .unwrap_or(10.0 * decade)
-}
-
-struct Canvas {
-    rgb: Vec<u8>,
-}
-
-impl Canvas {
-    fn dot(&mut self, x: f64, y: f64, colour: [u8; 3], thick: f64) {
-        let h = thick / 2.0;
-        let (x0, x1) = ((x - h).round() as i64, (x + h).round() as i64 - 1);
-        let (y0, y1) = ((y - h).round() as i64, (y + h).round() as i64 - 1);
-        for py in y0..=y1.max(y0) {
-            for px in x0..=x1.max(x0) {
-                if (0..WIDTH as i64).contains(&px) && (0..HEIGHT as i64).contains(&py) {
-                    let at = 3 * (py as usize * WIDTH + px as usize);
-                    self.rgb[at..at + 3].copy_from_slice(&colour);
-                }
-            }
-        }
-    }
-
-    /// A polyline; dashed: `Some((on, period))` in pixels of length.
-    fn path(&mut self, pts: &[(f64, f64)], colour: [u8; 3], thick: f64, dash: Option<(f64, f64)>) {
-        let mut run = 0.0;
-        for w in pts.windows(2) {
-            let ((x0, y0), (x1, y1)) = (w[0], w[1]);
-            let len = ((x1 - x0).powi(2) + (y1 - y0).powi(2)).sqrt();
-            let steps = (len * 4.0).ceil().max(1.0) as usize;
-            for s in 0..=steps {
-                let t = s as f64 / steps as f64;
-                let on = dash.is_none_or(|(on, period)| (run + t * len) % period < on);
-                if on {
-                    self.dot(x0 + t * (x1 - x0), y0 + t * (y1 - y0), colour, thick);
-                }
-            }
-            run += len;
-        }
-    }
-
-    fn text(&mut self, x: f64, y: f64, s: &str, colour: [u8; 3]) {
-        let (x, y) = (x.max(0.0) as usize, y.max(0.0) as usize);
-        draw_text(&mut self.rgb, WIDTH, x, y, s, SCALE, colour);
-    }
-
-    /// Text centred on (x, y).
-    fn text_centred(&mut self, x: f64, y: f64, s: &str, colour: [u8; 3]) {
-        let w = text_width(s, SCALE) as f64;
-        self.text(x - w / 2.0, y - (5 * SCALE) as f64 / 2.0, s, colour);
-    }
 }
 
 /// Screen point of intensity `r` (fraction of the outer ring) at γ, right or left half.
@@ -149,9 +100,7 @@ pub fn polar_diagram(p: &Photometry) -> PolarImage {
     let step = ring_step(curves.max());
     let rings = ((curves.max() / step).ceil() as usize).max(1);
     let outer = step * rings as f64;
-    let mut c = Canvas {
-        rgb: vec![255; 3 * WIDTH * HEIGHT],
-    };
+    let mut c = Canvas::new(WIDTH, HEIGHT);
 
     // Rings and spokes.
     for k in 1..=rings {

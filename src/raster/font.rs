@@ -1,6 +1,7 @@
 //! The crate's one 3 × 5 pixel bitmap font, for the labels of the render's false-colour
 //! scale, the receivers' PNG previews and the photometric polar diagram: digits, `.`,
-//! `-`, `+`, `e`, `%`, `/` and the letters of `cd/m2`, `cd/klm`, `lx` and `C`.
+//! `-`, `+`, `e`, `%`, `/`, `=`, the letters of `cd/m2`, `cd/klm`, `lx` and `C`, and the
+//! capitals of the UGR plot's labels (`UGR`, `X`, `Y`, `H`, `CROSSWISE`, `ENDWISE`).
 
 /// Rows of a glyph, top first; bit 2 is the left column.
 fn glyph(c: char) -> Option<[u8; 5]> {
@@ -28,6 +29,20 @@ fn glyph(c: char) -> Option<[u8; 5]> {
         '+' => [0b000, 0b010, 0b111, 0b010, 0b000],
         '%' => [0b101, 0b001, 0b010, 0b100, 0b101],
         'x' => [0b000, 0b000, 0b101, 0b010, 0b101],
+        '=' => [0b000, 0b111, 0b000, 0b111, 0b000],
+        'U' => [0b101, 0b101, 0b101, 0b101, 0b111],
+        'G' => [0b111, 0b100, 0b101, 0b101, 0b111],
+        'R' => [0b110, 0b101, 0b110, 0b101, 0b101],
+        'X' => [0b101, 0b101, 0b010, 0b101, 0b101],
+        'Y' => [0b101, 0b101, 0b010, 0b010, 0b010],
+        'H' => [0b101, 0b101, 0b111, 0b101, 0b101],
+        'O' => [0b010, 0b101, 0b101, 0b101, 0b010],
+        'S' => [0b011, 0b100, 0b010, 0b001, 0b110],
+        'W' => [0b101, 0b101, 0b101, 0b111, 0b101],
+        'I' => [0b111, 0b010, 0b010, 0b010, 0b111],
+        'E' => [0b111, 0b100, 0b111, 0b100, 0b111],
+        'N' => [0b110, 0b101, 0b101, 0b101, 0b101],
+        'D' => [0b110, 0b101, 0b101, 0b101, 0b110],
         ' ' => [0; 5],
         _ => return None,
     })

@@ -3,6 +3,7 @@
 //! PNG encoder, one palette module and one quantile function. Depends on nothing of the
 //! crate but its error type, so `photometry`, `output` and `render` may all use it.
 
+pub mod canvas;
 pub mod font;
 pub mod palette;
 

@@ -8,6 +8,7 @@ mod receiver;
 mod reliability;
 pub mod stop;
 pub mod ugr;
+pub mod ugr_table;
 pub mod verdict;
 
 use crate::scene::Geometry;

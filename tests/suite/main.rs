@@ -34,6 +34,7 @@ mod physics {
     mod render;
     mod surroundings;
     mod ugr;
+    mod ugr_table;
     mod verdict;
 }
 

@@ -12,6 +12,7 @@ mod photon_pass;
 mod progress;
 mod render;
 mod run;
+mod ugr_table;
 
 use clap::error::{ContextKind, ContextValue, ErrorKind};
 use clap::{Parser, Subcommand};
@@ -47,6 +48,9 @@ enum Command {
     /// Read a photometric file (IES LM-63 or EULUMDAT), print its flux, light output
     /// ratio, peak and opening, and write its polar diagram (cd/klm) as PNG.
     Photometry(photometry::PhotometryArgs),
+    /// The CIE 190:2010 UGR table of a photometric file (IES LM-63 or EULUMDAT): 19
+    /// rooms, crosswise and endwise, 5 reflectance sets, at 1000 lm; CSV and plot if asked.
+    UgrTable(ugr_table::UgrTableArgs),
     /// Ray throughput of every backend and ray API on a scene (incoherent random rays),
     /// with Embree's own C loop over the same rays for comparison.
     BenchRays(bench::rays::BenchRaysArgs),
@@ -73,6 +77,7 @@ fn main() -> ExitCode {
         Command::Info { scene } => info::command(&scene),
         Command::Report { out_dir } => luxtally::output::rebuild_report(&out_dir),
         Command::Photometry(args) => photometry::command(args),
+        Command::UgrTable(args) => ugr_table::command(args),
         Command::BenchRays(args) => bench::rays::command(args),
         Command::BenchPhotons(args) => bench::photons::command(args),
         Command::BenchScale(args) => bench::scale::command(args),
