@@ -144,11 +144,8 @@ fn exclusions(names: &[String], receivers: &[Receiver], i: usize, at: &str) -> R
         }
         out.push(k);
     }
-    let r = Receiver {
-        exclude: out.clone(),
-        ..receivers[i].clone()
-    };
-    if r.included_cells(receivers).is_some_and(|c| c.is_empty()) {
+    let within = receivers[i].cells_within(&out, receivers);
+    if !within.is_empty() && within.iter().all(|&x| x) {
         return Err(Error::input(
             at,
             "leaves no cell in: every cell's centre is excluded",

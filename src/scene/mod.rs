@@ -359,7 +359,13 @@ impl Receiver {
     /// receivers' areas (projected onto each along its normal); empty when it excludes
     /// none.
     pub fn excluded_cells(&self, receivers: &[Receiver]) -> Vec<bool> {
-        if self.exclude.is_empty() {
+        self.cells_within(&self.exclude, receivers)
+    }
+
+    /// Per cell, whether its centre lies within one of `others`' areas; empty when
+    /// `others` is.
+    pub fn cells_within(&self, others: &[usize], receivers: &[Receiver]) -> Vec<bool> {
+        if others.is_empty() {
             return Vec::new();
         }
         let [nu, nv] = self.cells;
@@ -367,7 +373,7 @@ impl Receiver {
             .map(|k| {
                 let (i, j) = ((k % nu) as f64 + 0.5, (k / nu) as f64 + 0.5);
                 let centre = self.corner + self.u * (i / nu as f64) + self.v * (j / nv as f64);
-                (self.exclude.iter()).any(|&e| receivers[e].coordinates_of(centre).is_some())
+                (others.iter()).any(|&e| receivers[e].coordinates_of(centre).is_some())
             })
             .collect()
     }

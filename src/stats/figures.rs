@@ -270,11 +270,24 @@ pub fn figure_stats(
     receivers: &[Receiver],
     k: usize,
 ) -> (ReceiverStats, f64, f64) {
+    counted_stats(
+        tallies,
+        receivers,
+        k,
+        receivers[k].included_cells(receivers).as_deref(),
+    )
+}
+
+/// [`figure_stats`] over the cells `included` (None: all).
+fn counted_stats(
+    tallies: &Tallies,
+    receivers: &[Receiver],
+    k: usize,
+    included: Option<&[usize]>,
+) -> (ReceiverStats, f64, f64) {
     let cells = tallies.receiver_cells(receivers, k);
     let total = tallies.receiver_total(receivers, k);
     let counts = tallies.counts();
-    let included = receivers[k].included_cells(receivers);
-    let included = included.as_deref();
     let stats = super::receiver_stats(cells, receivers[k].cells, counts, included);
     let (sigma, vov) = mean_and_sigma(cells, included, total, counts);
     (stats, sigma, vov)
@@ -285,10 +298,11 @@ pub fn figure_stats(
 /// the modelling ratio where it has a `modelling_with` partner.
 pub fn receiver_figures(scene: &Scene, tallies: &Tallies, k: usize) -> Figures {
     let receivers = &scene.receivers;
-    let (counted, mean_sigma, mean_vov) = figure_stats(tallies, receivers, k);
+    let included = receivers[k].included_cells(receivers);
+    let (counted, mean_sigma, mean_vov) = counted_stats(tallies, receivers, k, included.as_deref());
     let confidence = scene.simulation.confidence;
     let mut f = figures(&counted, mean_sigma, mean_vov, confidence);
-    if let Some(included) = receivers[k].included_cells(receivers) {
+    if let Some(included) = included {
         (f.min_cell, f.max_cell) = (included[f.min_cell], included[f.max_cell]);
     }
     if receivers[k].points {

@@ -118,13 +118,15 @@ impl ReceiverGrid {
             connections: connections_for(r.cell_count()),
             points: r.points,
             // A point has no area to cross: every vertex connects to it.
-            near_zone_m: match kind {
-                _ if r.points => 0.0,
-                Kind::Cylindrical | Kind::SemiCylindrical { .. } => 0.0,
-                _ => libm::hypot(
+            near_zone_m: if r.points
+                || matches!(kind, Kind::Cylindrical | Kind::SemiCylindrical { .. })
+            {
+                0.0
+            } else {
+                libm::hypot(
                     r.u.length() / r.cells[0] as f64,
                     r.v.length() / r.cells[1] as f64,
-                ),
+                )
             },
         }
     }

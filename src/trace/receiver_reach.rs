@@ -128,14 +128,11 @@ impl ReceiverGrid {
             Kind::Illuminance | Kind::Cylindrical | Kind::SemiCylindrical { .. } => {
                 // Stratum s of the receiver is the strip s/n ≤ a < (s+1)/n along u.
                 let (a, b) = ((stratum as f64 + uniform(rng)) / strata, uniform(rng));
+                let cell = self.cell_at(a, b);
                 // A point receiver's cell, picked as uniformly, scores at its centre.
                 let point = if self.points {
-                    let [nu, nv] = self.cells.map(|n| n as f64);
-                    let (i, j) = (
-                        (a * nu).floor().min(nu - 1.0),
-                        (b * nv).floor().min(nv - 1.0),
-                    );
-                    self.point_at((i + 0.5) / nu, (j + 0.5) / nv)
+                    let k = cell - self.first_cell;
+                    self.cell_point((k % self.cells[0], k / self.cells[0]), 0.5, 0.5)
                 } else {
                     self.point_at(a, b)
                 };
@@ -145,7 +142,7 @@ impl ReceiverGrid {
                 let response = self.arrival_factor(dir)?;
                 Some(Connection {
                     point,
-                    cell: self.cell_at(a, b),
+                    cell,
                     dir,
                     distance,
                     factor: self.cell_count() as f64 * response / (distance * distance),
