@@ -20,6 +20,7 @@ mod objects;
 pub mod observers;
 pub mod requirements;
 pub mod shapes;
+pub mod tasks;
 mod triangle_ids;
 
 pub use crate::light::Luminaire;

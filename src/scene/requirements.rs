@@ -5,6 +5,7 @@
 // `!(x > 0.0)` is deliberate: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use super::tasks::{Area, TaskType, TASK_TYPES};
 use super::{Observer, Quantity, Receiver};
 use crate::error::{Error, Result};
 use serde::Deserialize;
@@ -26,6 +27,12 @@ pub struct RequirementFile {
     pub modelling: Option<[f64; 2]>,
     /// The most an observer's UGR may be.
     pub ugr_max: Option<f64>,
+    /// A named EN 12464-1 task type (`scene::tasks`) whose values fill the keys left out.
+    pub task: Option<String>,
+    /// Which of the task's areas this receiver is (default `task`).
+    pub area: Option<String>,
+    /// The task's modified Ēm (2021's context modifiers) instead of the required one.
+    pub modified: Option<bool>,
 }
 
 /// A figure a requirement can bound (docs/designers.md).
@@ -104,6 +111,8 @@ pub struct Requirement {
     pub name: String,
     pub subject: Subject,
     pub checks: Vec<Check>,
+    /// The task type and area the limits come from (`task`), described.
+    pub basis: Option<String>,
 }
 
 /// A cylindrical receiver and the horizontal one its modelling ratio Ēz/Ēh divides by.
@@ -159,9 +168,10 @@ pub fn requirements(
     origin: &str,
 ) -> Result<Vec<Requirement>> {
     let mut out: Vec<Requirement> = Vec::new();
-    for (i, r) in entries.into_iter().enumerate() {
+    for (i, mut r) in entries.into_iter().enumerate() {
         let at = format!("{origin}: requirements[{i}]");
         let (subject, subject_name) = subject(&r, receivers, observers, &at)?;
+        let basis = apply_task(&mut r, subject, receivers, &at)?;
         let checks = checks(&r, subject, modelling, &at)?;
         let name = r.name.unwrap_or(subject_name);
         if out.iter().any(|o| o.name == name) {
@@ -174,9 +184,74 @@ pub fn requirements(
             name,
             subject,
             checks,
+            basis,
         });
     }
     Ok(out)
+}
+
+/// Fills the keys a requirement leaves out from its `task` row for its `area` (an
+/// observer: the row's R_UGL); returns what the limits came from.
+fn apply_task(
+    r: &mut RequirementFile,
+    subject: Subject,
+    receivers: &[Receiver],
+    at: &str,
+) -> Result<Option<String>> {
+    let Some(id) = &r.task else {
+        if r.area.is_some() || r.modified.is_some() {
+            return Err(Error::input(at, "`area` and `modified` need a `task`"));
+        }
+        return Ok(None);
+    };
+    let task = TaskType::find(id).ok_or_else(|| {
+        let known: Vec<&str> = TASK_TYPES.iter().map(|t| t.id).collect();
+        Error::input(
+            format!("{at}.task"),
+            format!("unknown task type `{id}` (known: {})", known.join(", ")),
+        )
+    })?;
+    let modified = r.modified.unwrap_or(false);
+    let receiver = match subject {
+        Subject::Observer(_) => {
+            if r.area.is_some() || r.modified.is_some() {
+                return Err(Error::input(
+                    at,
+                    "`area` and `modified` apply to a receiver, not an observer",
+                ));
+            }
+            r.ugr_max = r.ugr_max.or(Some(task.ugr_max));
+            return Ok(Some(format!("{}: {} (R_UGL)", task.source, task.title)));
+        }
+        Subject::Receiver(k) => &receivers[k],
+    };
+    let area = match r.area.as_deref() {
+        None => match receiver.quantity {
+            Quantity::Cylindrical => Area::Cylindrical,
+            _ => Area::Task,
+        },
+        Some(name) => Area::parse(name).ok_or_else(|| {
+            Error::input(
+                format!("{at}.area"),
+                format!("must be one of {}, got `{name}`", Area::NAMES),
+            )
+        })?,
+    };
+    if (area == Area::Cylindrical) != (receiver.quantity == Quantity::Cylindrical) {
+        return Err(Error::input(
+            format!("{at}.area"),
+            "`cylindrical` is the area of a cylindrical receiver, and only of one",
+        ));
+    }
+    let values = task.area_values(area, modified).ok_or_else(|| {
+        Error::input(
+            format!("{at}.modified"),
+            format!("task type `{id}` gives no modified value here"),
+        )
+    })?;
+    r.em = r.em.or(Some(values.em));
+    r.u0 = r.u0.or(values.u0);
+    Ok(Some(task.describe(area, modified)))
 }
 
 /// The receiver or observer a requirement names (exactly one), and its name.

@@ -64,6 +64,9 @@ pub struct CheckVerdict {
     pub observer: Option<String>,
     /// `em`, `emin`, `u0`, `g2`, `modelling` or `ugr`.
     pub figure: String,
+    /// The EN 12464-1 task type and area its limits come from (`task`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub basis: Option<String>,
     /// The limit: the figure must be at least `at_least`, or at most `at_most` (the
     /// other is null).
     pub at_least: Option<f64>,
@@ -209,6 +212,7 @@ fn check_verdict(
         receiver,
         observer,
         figure: check.figure.key().into(),
+        basis: req.basis.clone(),
         at_least: matches!(check.limit, Limit::AtLeast(_)).then_some(x),
         at_most: matches!(check.limit, Limit::AtMost(_)).then_some(x),
         value,

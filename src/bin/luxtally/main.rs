@@ -51,6 +51,8 @@ enum Command {
     /// The CIE 190:2010 UGR table of a photometric file (IES LM-63 or EULUMDAT): 19
     /// rooms, crosswise and endwise, 5 reflectance sets, at 1000 lm; CSV and plot if asked.
     UgrTable(ugr_table::UgrTableArgs),
+    /// List the EN 12464-1 task types a requirement's `task` can name, with their values.
+    Tasks,
     /// Ray throughput of every backend and ray API on a scene (incoherent random rays),
     /// with Embree's own C loop over the same rays for comparison.
     BenchRays(bench::rays::BenchRaysArgs),
@@ -78,6 +80,10 @@ fn main() -> ExitCode {
         Command::Report { out_dir } => luxtally::output::rebuild_report(&out_dir),
         Command::Photometry(args) => photometry::command(args),
         Command::UgrTable(args) => ugr_table::command(args),
+        Command::Tasks => {
+            print!("{}", luxtally::scene::tasks::table_text());
+            Ok(())
+        }
         Command::BenchRays(args) => bench::rays::command(args),
         Command::BenchPhotons(args) => bench::photons::command(args),
         Command::BenchScale(args) => bench::scale::command(args),

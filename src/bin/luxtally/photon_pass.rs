@@ -165,7 +165,11 @@ fn print_verdicts(v: &luxtally::stats::verdict::Verdicts) {
         100.0 * v.confidence,
         v.checks.len()
     );
-    for c in &v.checks {
+    for (i, c) in v.checks.iter().enumerate() {
+        let first_of_requirement = i == 0 || v.checks[i - 1].requirement != c.requirement;
+        if let (true, Some(basis)) = (first_of_requirement, &c.basis) {
+            println!("    {}: limits from {basis}", c.requirement);
+        }
         let expected = if c.reliable {
             c.decision_photons
                 .map(|n| format!(", decided by about {n} photons"))

@@ -294,3 +294,21 @@ fn until_decided_needs_requirements() {
     wrong[3] = "sure";
     assert_fails_with(&luxtally(&wrong), &["--until"]);
 }
+
+/// `luxtally tasks` lists every task type a requirement can name, with its values.
+#[test]
+fn tasks_lists_the_task_types() {
+    let out = luxtally(&["tasks"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for t in luxtally::scene::tasks::TASK_TYPES {
+        let line = text
+            .lines()
+            .find(|l| l.starts_with(&format!("{} ", t.id)))
+            .unwrap_or_else(|| panic!("no line for {}", t.id));
+        assert!(
+            line.contains(t.title) && line.contains(&format!("{}", t.ugr_max)),
+            "{line}"
+        );
+    }
+}

@@ -616,3 +616,42 @@ fn bad_requirements_are_rejected_in_one_line() {
         &["requirements[1].name", "duplicate requirement name `r`"],
     );
 }
+
+/// A named task type: unknown ids list the known ones; `area` must be one of the areas,
+/// `cylindrical` exactly on a cylindrical receiver; `modified` only where the row has a
+/// modified value; `area` and `modified` need a task and a receiver.
+#[test]
+fn bad_task_types_are_rejected_in_one_line() {
+    let req = |keys: &str| format!("{RECEIVER}[[requirements]]\nreceiver = \"r\"\n{keys}\n");
+    let m = error_of(&req("task = \"office.nap\""));
+    assert_has(
+        &m,
+        &[
+            "requirements[0].task",
+            "unknown task type `office.nap`",
+            "office.writing",
+        ],
+    );
+    let m = error_of(&req("task = \"office.writing\"\narea = \"floor\""));
+    assert_has(&m, &["requirements[0].area", "`floor`", "surrounding"]);
+    let m = error_of(&req("task = \"office.writing\"\narea = \"cylindrical\""));
+    assert_has(&m, &["requirements[0].area", "cylindrical receiver"]);
+    let m = error_of(&req("task = \"office.archives\"\nmodified = true"));
+    assert_has(
+        &m,
+        &[
+            "requirements[0].modified",
+            "`office.archives` gives no modified value",
+        ],
+    );
+    let m = error_of(&req("area = \"walls\"\nem = 50"));
+    assert_has(
+        &m,
+        &["requirements[0]", "`area` and `modified` need a `task`"],
+    );
+    let m = error_of(&format!(
+        "{RECEIVER}[[observers]]\nname = \"eye\"\nposition = [0, 0, 1.2]\nlook = [1, 0, 0]\n\
+         [[requirements]]\nobserver = \"eye\"\ntask = \"office.writing\"\narea = \"task\"\n"
+    ));
+    assert_has(&m, &["requirements[0]", "not an observer"]);
+}

@@ -169,3 +169,87 @@ fn unreliable_sigma_decides_nothing() {
     assert_eq!((em.reliable, em.outcome), (true, Outcome::Pass), "{em:?}");
     assert_eq!(v.overall, Outcome::Undecided);
 }
+
+/// A task type fills in the keys a requirement leaves out, per area, and a key written
+/// beside it wins: office.writing gives the task area 500 lx / 0.60, its surrounding
+/// 300 lx / 0.40, its background 100 lx / 0.10, a cylindrical receiver Ēz 150 lx (no
+/// U0), an observer R_UGL 19; the modified value and an explicit `em` override.
+#[test]
+fn a_task_type_sets_each_areas_limits() {
+    use luxtally::scene::{Check, FigureName, Limit};
+    let plane = |name: &str, z: f64, extra: &str| {
+        format!(
+            "[[receivers]]\nname = \"{name}\"\ncorner = [0, 0, {z}]\nu = [1, 0, 0]\n\
+             v = [0, 1, 0]\ncells = [2, 2]\n{extra}"
+        )
+    };
+    let req = |receiver: &str, keys: &str| {
+        let name = format!("{receiver} {}", keys.replace('"', "'"));
+        format!(
+            "[[requirements]]\nname = \"{name}\"\nreceiver = \"{receiver}\"\n\
+             task = \"office.writing\"\n{keys}\n"
+        )
+    };
+    let toml = [
+        plane("t", 0.8, ""),
+        plane("z", 1.2, "quantity = \"cylindrical\"\n"),
+        "[[observers]]\nname = \"eye\"\nposition = [0.5, 0.5, 1.2]\nlook = [1, 0, 0]\n".into(),
+        req("t", ""),
+        req("t", "area = \"surrounding\""),
+        req("t", "area = \"background\""),
+        req("t", "modified = true"),
+        req("t", "em = 750"),
+        req("t", "area = \"ceiling\""),
+        req("z", ""),
+        "[[requirements]]\nobserver = \"eye\"\ntask = \"office.writing\"\n".into(),
+        "[[lights]]\ntype = \"point\"\nposition = [0.5, 0.5, 2]\nflux_lm = 1000\n".into(),
+    ]
+    .concat();
+    let scene = scene(&toml);
+    let at_least = |figure, x| Check {
+        figure,
+        limit: Limit::AtLeast(x),
+    };
+    let expected: [&[Check]; 8] = [
+        &[
+            at_least(FigureName::Mean, 500.0),
+            at_least(FigureName::U0, 0.6),
+        ],
+        &[
+            at_least(FigureName::Mean, 300.0),
+            at_least(FigureName::U0, 0.4),
+        ],
+        &[
+            at_least(FigureName::Mean, 100.0),
+            at_least(FigureName::U0, 0.1),
+        ],
+        &[
+            at_least(FigureName::Mean, 1000.0),
+            at_least(FigureName::U0, 0.6),
+        ],
+        &[
+            at_least(FigureName::Mean, 750.0),
+            at_least(FigureName::U0, 0.6),
+        ],
+        &[
+            at_least(FigureName::Mean, 100.0),
+            at_least(FigureName::U0, 0.1),
+        ],
+        &[at_least(FigureName::Mean, 150.0)],
+        &[Check {
+            figure: FigureName::Ugr,
+            limit: Limit::AtMost(19.0),
+        }],
+    ];
+    assert_eq!(scene.requirements.len(), expected.len());
+    for (r, want) in scene.requirements.iter().zip(expected) {
+        assert_eq!(r.checks, want, "{}", r.name);
+        let basis = r.basis.as_deref().expect("a basis");
+        assert!(basis.contains("writing, typing"), "{basis}");
+    }
+    assert!(scene.requirements[1]
+        .basis
+        .as_deref()
+        .unwrap()
+        .contains("immediate surrounding"));
+}
