@@ -73,12 +73,14 @@ impl<'s> Engine<'s> {
             ));
         }
         crate::trace::endless::refuse_endless(scene, &tracer.emitters)?;
+        let observer_occluded = crate::stats::ugr::occlusion(scene, caster);
+        crate::stats::ugr::refuse_unratable_requirements(scene, &observer_occluded)?;
         Ok(Engine {
             pool: thread_pool(threads)?,
             tracer,
             threads,
             direct_sides: std::sync::OnceLock::new(),
-            observer_occluded: crate::stats::ugr::occlusion(scene, caster),
+            observer_occluded,
         })
     }
 

@@ -4,8 +4,9 @@
 //! the eye, from the observer's hidden receiver (its photons' part).
 
 use crate::accel::{RayBatch, RayCaster};
+use crate::error::{Error, Result};
 use crate::light::Luminaire;
-use crate::scene::{Observer, Scene};
+use crate::scene::{Observer, Scene, Subject};
 use crate::tally::{CellSums, Counts, Tallies};
 use glam::DVec3;
 
@@ -204,6 +205,41 @@ pub fn observer_terms(scene: &Scene, o: &Observer, occluded: &[bool]) -> Vec<Ter
             term
         })
         .collect()
+}
+
+/// Refuses a UGR requirement on an observer who sees (counts) a luminaire whose solid
+/// angle lies outside CIE 117's range: UGR is not defined for it there (CIE 147's
+/// corrections are not applied), so no verdict could ever be reached. `occluded` as
+/// [`occlusion`] gives it. Observers without such a requirement are rated and marked
+/// not valid instead.
+pub fn refuse_unratable_requirements(scene: &Scene, occluded: &[Vec<bool>]) -> Result<()> {
+    let lums = luminaires(scene);
+    let (lo, hi) = OMEGA_RANGE_SR;
+    for req in &scene.requirements {
+        let Subject::Observer(k) = req.subject else {
+            continue;
+        };
+        let o = &scene.observers[k];
+        let seen = occluded.get(k).map_or(&[][..], Vec::as_slice);
+        let terms = observer_terms(scene, o, seen);
+        let outside = terms
+            .iter()
+            .zip(&lums)
+            .find(|(t, _)| t.seen == Seen::Counted && !(t.omega_sr > lo && t.omega_sr < hi));
+        if let Some((t, (label, _))) = outside {
+            return Err(Error::input(
+                format!("{}: requirement `{}`", scene.path.display(), req.name),
+                format!(
+                    "observer `{}` sees luminaire {label} under ω = {:.3e} sr, outside CIE \
+                     117's {lo} < ω < {hi} sr: its UGR is not defined there, so it cannot \
+                     be judged (move the observer, or drop the requirement to have the \
+                     rating reported as not valid)",
+                    o.name, t.omega_sr
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Observer `o`'s E_ind and its σ (lx): its hidden receiver's photon part.

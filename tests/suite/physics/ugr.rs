@@ -11,6 +11,7 @@ use luxtally::output::summary::Summary;
 use luxtally::scene::{load_str, Scene};
 use luxtally::stats::ugr;
 use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
 
 /// A 0.6 m × 0.6 m opening (LM-63 units 2: metres) emitting 1000 cd uniformly below the
 /// horizontal (γ 0–90°; 0 at 180°), written into a folder of its own.
@@ -336,6 +337,24 @@ fn below_the_line_of_sight_and_too_large_a_source_are_flagged() {
     assert!(o.luminaires[0].counted && o.luminaires[0].omega_sr > 0.1);
     assert!(o.ugr.is_some() && !o.valid);
     assert!(o.invalid_reason.as_deref().unwrap().contains("solid angle"));
+    // A requirement on that rating could never be judged: the run is refused.
+    let judged = load(&format!(
+        "{near}[[requirements]]\nname = \"glare\"\nobserver = \"front\"\nugr_max = 19\n"
+    ));
+    let o = common::options(&judged, 1_000, 1, Backend::Embree);
+    let e = match luxtally::run::run(&judged, &o, &AtomicBool::new(false), &mut ()) {
+        Ok(_) => panic!("a requirement on an unratable observer ran"),
+        Err(e) => e.to_string(),
+    };
+    for needle in [
+        "requirement `glare`",
+        "observer `front`",
+        "ω = 2.8",
+        "0.0003 < ω < 0.1",
+    ] {
+        assert!(e.contains(needle), "`{needle}` not in: {e}");
+    }
+    assert!(!e.contains('\n'), "one line: {e}");
 }
 
 #[test]
