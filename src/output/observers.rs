@@ -43,6 +43,8 @@ pub struct ObserverLuminaire {
     pub h_m: f64,
     pub t_m: f64,
     pub occluded: bool,
+    /// The fraction of the opening the eye sees; `omega_sr` is of that part.
+    pub visible_fraction: f64,
     pub counted: bool,
     /// `counted` or why not.
     pub status: String,
@@ -60,14 +62,14 @@ pub fn observers(state: &RunState<'_>) -> Option<BTreeMap<String, ObserverSummar
     let z = normal_quantile(1.0 - (1.0 - confidence) / 2.0);
     let mut out = BTreeMap::new();
     for (k, o) in scene.observers.iter().enumerate() {
-        let occluded = state
+        let visible = state
             .setup
-            .observer_occluded
+            .observer_visible
             .get(k)
             .map_or(&[][..], Vec::as_slice);
-        let terms = ugr::observer_terms(scene, o, occluded);
-        let rows = (lums.iter().zip(&terms).enumerate())
-            .map(|(j, ((label, _), term))| ObserverLuminaire {
+        let terms = ugr::observer_terms(scene, o, visible);
+        let rows = (lums.iter().zip(&terms))
+            .map(|((label, _), term)| ObserverLuminaire {
                 label: label.to_string(),
                 luminance_cdm2: term.luminance_cdm2,
                 omega_sr: term.omega_sr,
@@ -75,7 +77,8 @@ pub fn observers(state: &RunState<'_>) -> Option<BTreeMap<String, ObserverSummar
                 r_m: term.r_h_t_m[0],
                 h_m: term.r_h_t_m[1],
                 t_m: term.r_h_t_m[2],
-                occluded: occluded.get(j) == Some(&true),
+                occluded: term.visible_fraction == 0.0,
+                visible_fraction: term.visible_fraction,
                 counted: term.seen == Seen::Counted,
                 status: term.seen.as_str().to_string(),
             })

@@ -301,7 +301,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
             state.progress,
         ),
         verdicts: (!scene.requirements.is_empty())
-            .then(|| verdicts(scene, t, &state.setup.observer_occluded)),
+            .then(|| verdicts(scene, t, &state.setup.observer_visible)),
         forecast: match (state.options.stop.target_error, state.progress.forecast) {
             (Some(target_error), Some(f)) => Some(ForecastSummary {
                 target_error,

@@ -42,7 +42,7 @@ pub(crate) struct Engine<'s> {
     direct_sides: std::sync::OnceLock<Vec<Vec<u32>>>,
     /// Per observer, per luminaire: whether its line to the eye is blocked
     /// (`stats::ugr::occlusion`), for the observers' ratings and `ugr_max` checks.
-    pub(crate) observer_occluded: Vec<Vec<bool>>,
+    pub(crate) observer_visible: Vec<Vec<f64>>,
 }
 
 impl<'s> Engine<'s> {
@@ -73,21 +73,21 @@ impl<'s> Engine<'s> {
             ));
         }
         crate::trace::endless::refuse_endless(scene, &tracer.emitters)?;
-        let observer_occluded = crate::stats::ugr::occlusion(scene, caster);
-        crate::stats::ugr::refuse_unratable_requirements(scene, &observer_occluded)?;
+        let observer_visible = crate::stats::ugr::visibility(scene, caster);
+        crate::stats::ugr::refuse_unratable_requirements(scene, &observer_visible)?;
         Ok(Engine {
             pool: thread_pool(threads)?,
             tracer,
             threads,
             direct_sides: std::sync::OnceLock::new(),
-            observer_occluded,
+            observer_visible,
         })
     }
 
     /// What the set-up settled, `setup` being when it began.
     pub(crate) fn setup(&self, setup: Instant) -> RunSetup {
         let mut s = RunSetup::new(setup, &self.tracer, self.threads);
-        s.observer_occluded = self.observer_occluded.clone();
+        s.observer_visible = self.observer_visible.clone();
         s
     }
 

@@ -216,12 +216,12 @@ impl<'r, 's> Epochs<'r, 's> {
         let stop = &self.options.stop;
         let decided = || {
             let (scene, tallies) = (self.scene, &self.progress.tallies);
-            let occluded = &self.engine.observer_occluded;
+            let visible = &self.engine.observer_visible;
             stop.until == Some(Until::Decided)
                 && self
                     .engine
                     .pool
-                    .install(|| verdicts(scene, tallies, occluded))
+                    .install(|| verdicts(scene, tallies, visible))
                     .decided()
         };
         if stop.target_error.is_some_and(|goal| error <= goal) {

@@ -86,7 +86,7 @@ pub struct RunSetup {
     pub estimators: Vec<Estimator>,
     /// Per observer, per luminaire (`stats::ugr::luminaires`): whether its line to the
     /// eye is blocked.
-    pub observer_occluded: Vec<Vec<bool>>,
+    pub observer_visible: Vec<Vec<f64>>,
 }
 
 impl RunSetup {
@@ -100,7 +100,7 @@ impl RunSetup {
             bounce_cap_a_priori: tracer.bounce_cap_a_priori,
             threads,
             estimators: tracer.receivers.iter().map(|g| g.estimator).collect(),
-            observer_occluded: Vec::new(),
+            observer_visible: Vec::new(),
         }
     }
 }

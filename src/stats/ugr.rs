@@ -7,6 +7,7 @@ use crate::accel::{RayBatch, RayCaster};
 use crate::error::{Error, Result};
 use crate::light::Luminaire;
 use crate::scene::{Observer, Scene, Subject};
+use crate::stats::ugr_table::projected_area_m2;
 use crate::tally::{CellSums, Counts, Tallies};
 use glam::DVec3;
 
@@ -89,6 +90,8 @@ pub struct Term {
     /// Geometry: distance along the line of sight R, height above it H, lateral T, m.
     pub r_h_t_m: [f64; 3],
     pub seen: Seen,
+    /// The fraction of the opening the eye sees ([`visibility`]); ω is of that part.
+    pub visible_fraction: f64,
 }
 
 impl Term {
@@ -113,9 +116,10 @@ pub fn view_frame(look: DVec3) -> (DVec3, DVec3, DVec3) {
     (look, right, right.cross(look))
 }
 
-/// Luminaire `lum` as seen from `eye` looking along `look` (unit): L = I·scale/A_proj
-/// with A_proj = area·cos θ of the flat opening (facing the luminaire's −z), ω =
-/// A_proj/d², p by [`position_index`] with view up +z.
+/// Luminaire `lum` as seen from `eye` looking along `look` (unit), unoccluded: L =
+/// I·scale/A_proj with A_proj the luminous area seen from the eye (the opening, facing
+/// the luminaire's −z, times cos θ, plus its luminous sides: the CIE 190 table's
+/// [`projected_area_m2`]), ω = A_proj/d², p by [`position_index`] with view up +z.
 pub fn term(lum: &Luminaire, eye: DVec3, look: DVec3) -> Term {
     let to_lum = lum.position - eye;
     let d = to_lum.length();
@@ -126,7 +130,7 @@ pub fn term(lum: &Luminaire, eye: DVec3, look: DVec3) -> Term {
     let towards_eye = lum.frame.transpose() * (-s);
     let cos = -towards_eye.z;
     let area = lum.photometry.opening.area_m2();
-    let a_proj = area * cos.max(0.0);
+    let a_proj = projected_area_m2(lum.photometry.opening, lum.photometry.height_m, towards_eye);
     let (l, omega) = if a_proj > 0.0 {
         let i = lum.photometry.intensity_toward_cd(towards_eye) * lum.scale;
         (i / a_proj, a_proj / (d * d))
@@ -141,7 +145,7 @@ pub fn term(lum: &Luminaire, eye: DVec3, look: DVec3) -> Term {
         Seen::OutsideField
     } else if !(area > 0.0) {
         Seen::NoLuminousArea
-    } else if !(cos > 0.0) {
+    } else if !(cos > 0.0 && a_proj > 0.0) {
         Seen::FacesAway
     } else {
         Seen::Counted
@@ -152,6 +156,7 @@ pub fn term(lum: &Luminaire, eye: DVec3, look: DVec3) -> Term {
         position_index: p,
         r_h_t_m: r_h_t,
         seen,
+        visible_fraction: 1.0,
     }
 }
 
@@ -164,19 +169,26 @@ pub fn luminaires(scene: &Scene) -> Vec<(&str, &Luminaire)> {
         .collect()
 }
 
-/// Per observer, per luminaire of [`luminaires`]: whether the segment from the eye to
-/// the opening's centre is blocked by the scene's geometry (one shadow ray each, cast
-/// in the scene's local frame, stopping 1 mm short of either end).
-pub fn occlusion(scene: &Scene, caster: &dyn RayCaster) -> Vec<Vec<bool>> {
+/// Points per side of the grid over a luminaire's opening that [`visibility`] casts
+/// shadow rays to: 8 × 8 resolves the visible fraction to 1/64.
+pub const VISIBILITY_GRID: usize = 8;
+
+/// Per observer, per luminaire of [`luminaires`]: the fraction of its opening the eye
+/// sees, from shadow rays to the centres of a [`VISIBILITY_GRID`]² grid over the
+/// opening (equal-area cells; one ray to the centre of a point opening), cast in the
+/// scene's local frame and stopping 1 mm short of either end. A partly hidden
+/// luminaire keeps its luminance and counts with its visible solid angle.
+pub fn visibility(scene: &Scene, caster: &dyn RayCaster) -> Vec<Vec<f64>> {
     let lums = luminaires(scene);
     if scene.observers.is_empty() || lums.is_empty() {
         return vec![Vec::new(); scene.observers.len()];
     }
+    let targets: Vec<Vec<DVec3>> = (lums.iter()).map(|(_, lum)| opening_points(lum)).collect();
     let origin = scene.geometry.origin;
-    let mut rays = RayBatch::with_capacity(scene.observers.len() * lums.len());
+    let mut rays = RayBatch::with_capacity(scene.observers.len() * lums.len() * 64);
     for o in &scene.observers {
-        for (_, lum) in &lums {
-            let to = lum.position - o.position;
+        for target in targets.iter().flatten() {
+            let to = *target - o.position;
             let eps = (1e-3 / to.length()).min(0.25) as f32;
             rays.push(
                 (o.position - origin).as_vec3().into(),
@@ -188,18 +200,44 @@ pub fn occlusion(scene: &Scene, caster: &dyn RayCaster) -> Vec<Vec<bool>> {
     }
     let mut occluded = Vec::new();
     caster.occluded(&rays, &mut occluded);
-    occluded.chunks(lums.len()).map(<[bool]>::to_vec).collect()
+    let mut blocked = occluded.into_iter();
+    (scene.observers.iter())
+        .map(|_| {
+            (targets.iter())
+                .map(|t| {
+                    let seen = blocked.by_ref().take(t.len()).filter(|&b| !b).count();
+                    seen as f64 / t.len() as f64
+                })
+                .collect()
+        })
+        .collect()
 }
 
-/// Observer `o`'s terms, one per luminaire of [`luminaires`], with `occluded` (per
-/// luminaire, from [`occlusion`]) applied.
-pub fn observer_terms(scene: &Scene, o: &Observer, occluded: &[bool]) -> Vec<Term> {
+/// World points at the centres of the equal-area cells of a luminaire's opening.
+fn opening_points(lum: &Luminaire) -> Vec<DVec3> {
+    let opening = lum.photometry.opening;
+    if !(opening.area_m2() > 0.0) {
+        return vec![lum.position];
+    }
+    let n = VISIBILITY_GRID;
+    let at = |k: usize| (k as f64 + 0.5) / n as f64;
+    (0..n * n)
+        .map(|k| lum.position + lum.frame * opening.point_at(at(k % n), at(k / n)))
+        .collect()
+}
+
+/// Observer `o`'s terms, one per luminaire of [`luminaires`], with `visible` (per
+/// luminaire, from [`visibility`]; absent: fully visible) applied.
+pub fn observer_terms(scene: &Scene, o: &Observer, visible: &[f64]) -> Vec<Term> {
     luminaires(scene)
         .iter()
         .enumerate()
         .map(|(j, (_, lum))| {
             let mut term = term(lum, o.position, o.look);
-            if occluded.get(j) == Some(&true) && term.seen == Seen::Counted {
+            let fraction = visible.get(j).copied().unwrap_or(1.0);
+            term.visible_fraction = fraction;
+            term.omega_sr *= fraction;
+            if !(fraction > 0.0) && term.seen == Seen::Counted {
                 term.seen = Seen::Occluded;
             }
             term
@@ -209,10 +247,10 @@ pub fn observer_terms(scene: &Scene, o: &Observer, occluded: &[bool]) -> Vec<Ter
 
 /// Refuses a UGR requirement on an observer who sees (counts) a luminaire whose solid
 /// angle lies outside CIE 117's range: UGR is not defined for it there (CIE 147's
-/// corrections are not applied), so no verdict could ever be reached. `occluded` as
-/// [`occlusion`] gives it. Observers without such a requirement are rated and marked
+/// corrections are not applied), so no verdict could ever be reached. `visible` as
+/// [`visibility`] gives it. Observers without such a requirement are rated and marked
 /// not valid instead.
-pub fn refuse_unratable_requirements(scene: &Scene, occluded: &[Vec<bool>]) -> Result<()> {
+pub fn refuse_unratable_requirements(scene: &Scene, visible: &[Vec<f64>]) -> Result<()> {
     let lums = luminaires(scene);
     let (lo, hi) = OMEGA_RANGE_SR;
     for req in &scene.requirements {
@@ -220,7 +258,7 @@ pub fn refuse_unratable_requirements(scene: &Scene, occluded: &[Vec<bool>]) -> R
             continue;
         };
         let o = &scene.observers[k];
-        let seen = occluded.get(k).map_or(&[][..], Vec::as_slice);
+        let seen = visible.get(k).map_or(&[][..], Vec::as_slice);
         let terms = observer_terms(scene, o, seen);
         let outside = terms
             .iter()

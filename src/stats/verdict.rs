@@ -122,10 +122,10 @@ impl Verdicts {
     }
 }
 
-/// The verdicts on `scene`'s requirements from `tallies`; `observer_occluded` is, per
-/// observer, per luminaire, whether its line to the eye is blocked
-/// (`stats::ugr::occlusion`).
-pub fn verdicts(scene: &Scene, tallies: &Tallies, observer_occluded: &[Vec<bool>]) -> Verdicts {
+/// The verdicts on `scene`'s requirements from `tallies`; `observer_visible` is, per
+/// observer, per luminaire, the fraction of its opening the eye sees
+/// (`stats::ugr::visibility`).
+pub fn verdicts(scene: &Scene, tallies: &Tallies, observer_visible: &[Vec<f64>]) -> Verdicts {
     let confidence = scene.simulation.confidence;
     let count: usize = scene.requirements.iter().map(|r| r.checks.len()).sum();
     let alpha = (1.0 - confidence) / count.max(1) as f64;
@@ -134,8 +134,8 @@ pub fn verdicts(scene: &Scene, tallies: &Tallies, observer_occluded: &[Vec<bool>
         let subject = match req.subject {
             Subject::Receiver(k) => Judge::Receiver(ReceiverBounds::new(scene, tallies, k)),
             Subject::Observer(k) => {
-                let occluded = observer_occluded.get(k).map_or(&[][..], Vec::as_slice);
-                Judge::Observer(ObserverBounds::new(scene, tallies, k, occluded))
+                let visible = observer_visible.get(k).map_or(&[][..], Vec::as_slice);
+                Judge::Observer(ObserverBounds::new(scene, tallies, k, visible))
             }
         };
         for check in &req.checks {
@@ -368,9 +368,9 @@ struct ObserverBounds {
 }
 
 impl ObserverBounds {
-    fn new(scene: &Scene, tallies: &Tallies, k: usize, occluded: &[bool]) -> ObserverBounds {
+    fn new(scene: &Scene, tallies: &Tallies, k: usize, visible: &[f64]) -> ObserverBounds {
         let o = &scene.observers[k];
-        let terms = ugr::observer_terms(scene, o, occluded);
+        let terms = ugr::observer_terms(scene, o, visible);
         let cells = tallies.receiver_cells(&scene.receivers, o.receiver);
         let stats = receiver_stats(cells, [1, 1], tallies.counts(), None);
         ObserverBounds {

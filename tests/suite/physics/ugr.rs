@@ -184,12 +184,39 @@ fn a_box_between_eye_and_luminaire_removes_it() {
     let s = run(&load(&scene_text(blocker)), 5_000, 1);
     let o = observer(&s, "front");
     assert!(o.luminaires[0].occluded);
+    assert_eq!(o.luminaires[0].visible_fraction, 0.0);
     assert!(!o.luminaires[0].counted);
     assert_eq!(o.luminaires[0].status, "occluded");
     assert_eq!(o.ugr, None);
     assert!(!o.valid);
     let clear = run(&load(&scene_text("")), 5_000, 1);
     assert!(!observer(&clear, "front").luminaires[0].occluded);
+}
+
+/// A plate that hides exactly the half x < 3 m of the opening from the front eye: the
+/// luminaire counts with half its solid angle and the same luminance, so its Σ L²ω/p²
+/// halves (the visible fraction is resolved to 1/64, and this edge falls between the
+/// grid's columns).
+#[test]
+fn a_partly_hidden_luminaire_counts_with_its_visible_solid_angle() {
+    // The eye–opening rays cross z = 2.7 at 15/16 of the way: x_o = 3 maps to 2.8125.
+    let plate = r#"
+        [[objects]]
+        shape = "rect"
+        corner = [2.4, 0, 2.7]
+        u = [0.4125, 0, 0]
+        v = [0, 1, 0]
+        material = "grey"
+    "#;
+    let half = run(&load(&scene_text(plate)), 5_000, 1);
+    let clear = run(&load(&scene_text("")), 5_000, 1);
+    let (h, c) = (observer(&half, "front"), observer(&clear, "front"));
+    let (hl, cl) = (&h.luminaires[0], &c.luminaires[0]);
+    assert_eq!((hl.visible_fraction, cl.visible_fraction), (0.5, 1.0));
+    assert!(hl.counted && !hl.occluded);
+    assert_eq!(hl.luminance_cdm2, cl.luminance_cdm2);
+    close(hl.omega_sr, cl.omega_sr / 2.0, 1e-12, "visible ω");
+    close(h.sum, c.sum / 2.0, 1e-12, "Σ L²ω/p²");
 }
 
 /// The luminaire in a closed box of reflectance `rho`, an observer inside.
