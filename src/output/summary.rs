@@ -267,16 +267,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
         setup_s: state.setup.setup_s,
         stop_reason: state.stop_reason.map(|r| r.as_str().to_string()),
         total_flux_lm: state.setup.total_flux_lm,
-        lights: scene
-            .lights
-            .iter()
-            .zip(&state.setup.light_flux_lm)
-            .map(|(l, f)| LightSummary {
-                label: l.label.clone(),
-                flux_lm: *f,
-                maintenance_factor: l.kind.maintenance_factor(),
-            })
-            .collect(),
+        lights: light_summaries(state),
         luminaires: luminaires(scene),
         target: state.target.describe(&scene.receivers),
         absolute_error: state.options.stop.absolute,
@@ -302,15 +293,32 @@ pub fn build(state: &RunState<'_>) -> Summary {
         ),
         verdicts: (!scene.requirements.is_empty())
             .then(|| verdicts(scene, t, &state.setup.observer_visible)),
-        forecast: match (state.options.stop.target_error, state.progress.forecast) {
-            (Some(target_error), Some(f)) => Some(ForecastSummary {
-                target_error,
-                predicted_total_s: f.total_s,
-                predicted_photons: f.photons,
-            }),
-            _ => None,
-        },
+        forecast: forecast_summary(state),
         observers: super::observers::observers(state),
+    }
+}
+
+/// Each light's label, flux and maintenance factor.
+fn light_summaries(state: &RunState<'_>) -> Vec<LightSummary> {
+    (state.scene.lights.iter())
+        .zip(&state.setup.light_flux_lm)
+        .map(|(l, f)| LightSummary {
+            label: l.label.clone(),
+            flux_lm: *f,
+            maintenance_factor: l.kind.maintenance_factor(),
+        })
+        .collect()
+}
+
+/// The forecast to the target error (None without a target or a forecast yet).
+fn forecast_summary(state: &RunState<'_>) -> Option<ForecastSummary> {
+    match (state.options.stop.target_error, state.progress.forecast) {
+        (Some(target_error), Some(f)) => Some(ForecastSummary {
+            target_error,
+            predicted_total_s: f.total_s,
+            predicted_photons: f.photons,
+        }),
+        _ => None,
     }
 }
 
