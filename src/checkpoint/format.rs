@@ -4,6 +4,7 @@
 
 use super::Checkpoint;
 use crate::stats::forecast::HistoryPoint;
+use crate::stats::verdict::CheckCounts;
 use crate::tally::{CellSums, Moments, Tallies};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -19,14 +20,15 @@ const MAGIC: &[u8; 8] = b"LUXCKPT1";
 /// to `trace::MAX_BOUNCE_CAP`), which changes the numbers of scenes with an albedo above
 /// 0.99972 or lossless materials; the cells hold central moments in a score unit
 /// (`tally::Moments`), not power sums. 4: the scene fingerprint is
-/// `scene::fingerprint::run`.
-pub const FORMAT_VERSION: u32 = 5;
+/// `scene::fingerprint::run`. 5: the cells gain one total slot per receiver
+/// (its figures' covariance). 6: a history point carries its checks' counts (`CheckCounts`).
+pub const FORMAT_VERSION: u32 = 6;
 const HEADER_BYTES: usize = 8 + 4 + 8 + 4;
 
 /// A history point as saved: [`HistoryPoint`]'s fields in order (postcard cannot skip
 /// fields, and summary.json's serde attributes skip some).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub(super) struct SavedPoint(f64, u64, f64, Option<f64>, Option<u64>);
+pub(super) struct SavedPoint(f64, u64, f64, Option<f64>, Option<u64>, Option<CheckCounts>);
 
 impl SavedPoint {
     pub(super) fn saved(p: &HistoryPoint) -> SavedPoint {
@@ -36,17 +38,19 @@ impl SavedPoint {
             p.rel_error,
             p.forecast_s,
             p.forecast_photons,
+            p.checks,
         )
     }
 
     pub(super) fn point(&self) -> HistoryPoint {
-        let SavedPoint(elapsed_s, photons, rel_error, forecast_s, forecast_photons) = *self;
+        let SavedPoint(elapsed_s, photons, rel_error, forecast_s, forecast_photons, checks) = *self;
         HistoryPoint {
             elapsed_s,
             photons,
             rel_error,
             forecast_s,
             forecast_photons,
+            checks,
         }
     }
 }
@@ -327,13 +331,18 @@ mod tests {
     use super::*;
     use crate::checkpoint::Numbers;
 
-    /// Length and CRC-32 of the fixed checkpoint below, encoded by format 4.
-    const GOLDEN_LEN: usize = 138;
-    const GOLDEN_CRC: u32 = 1_290_548_772;
+    /// Length and CRC-32 of the fixed checkpoint below, encoded by format 6.
+    const GOLDEN_LEN: usize = 161;
+    const GOLDEN_CRC: u32 = 1_275_775_374;
 
     #[test]
     fn a_damaged_checkpoint_is_refused_in_one_line() {
         let t = Tallies::new(2, 3, 1.0);
+        let counts = CheckCounts {
+            pass: 1,
+            fail: 2,
+            undecided: 3,
+        };
         let c = Checkpoint {
             scene_path: "s.toml".into(),
             scene_fingerprint: 7,
@@ -351,13 +360,13 @@ mod tests {
                 Bytes(pack_cells(&t.cells)),
             ),
             direct_per_photon: 0.25,
-            history: vec![],
+            history: vec![SavedPoint(0.5, 10, 0.1, None, None, Some(counts))],
             times_s: [1.0; 4],
             chunks: vec![],
         };
         let bytes = c.encode().unwrap();
         assert_eq!(Checkpoint::decode(&bytes, "c").unwrap(), c);
-        // Format 5's encoding of this checkpoint: a change here needs FORMAT_VERSION bumped.
+        // Format 6's encoding of this checkpoint: a change here needs FORMAT_VERSION bumped.
         assert_eq!(
             (bytes.len(), crc32fast::hash(&bytes)),
             (GOLDEN_LEN, GOLDEN_CRC),

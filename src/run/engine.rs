@@ -84,6 +84,21 @@ impl<'s> Engine<'s> {
         })
     }
 
+    /// The verdicts on the scene's requirements from `tallies`, on the pool; `None`
+    /// without requirements, or for a shard (its tallies lack the direct light).
+    pub(crate) fn verdicts(
+        &self,
+        scene: &Scene,
+        tallies: &Tallies,
+        shard: bool,
+    ) -> Option<crate::stats::verdict::Verdicts> {
+        let visible = &self.observer_visible;
+        (!scene.requirements.is_empty() && !shard).then(|| {
+            self.pool
+                .install(|| crate::stats::verdict::verdicts(scene, tallies, visible))
+        })
+    }
+
     /// What the set-up settled, `setup` being when it began.
     pub(crate) fn setup(&self, setup: Instant) -> RunSetup {
         let mut s = RunSetup::new(setup, &self.tracer, self.threads);

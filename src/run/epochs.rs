@@ -8,7 +8,6 @@ use crate::distributed::Distributor;
 use crate::scene::Scene;
 use crate::stats::forecast::{forecast, HistoryPoint};
 use crate::stats::stop::{min_hits, StopReason, Target};
-use crate::stats::verdict::verdicts;
 use crate::tally::ChunkTally;
 use crate::trace::direct::PILOT_REPLICATES;
 use crate::trace::{Scratch, CHUNK_PHOTONS};
@@ -171,12 +170,16 @@ impl<'r, 's> Epochs<'r, 's> {
                 stop.absolute,
             )
         });
+        let verdicts = self
+            .engine
+            .verdicts(scene, tallies, self.progress.shard.is_some());
         let point = HistoryPoint {
             elapsed_s,
             photons: tallies.photons,
             rel_error: error,
             forecast_s: None,
             forecast_photons: None,
+            checks: verdicts.as_ref().map(|v| v.counts()),
         };
         let p = &mut self.progress;
         p.history.push(point);
@@ -199,34 +202,27 @@ impl<'r, 's> Epochs<'r, 's> {
         let unreachable = stop.stop_if_unreachable
             && target_unreachable(scene, self.options, &self.target, p).is_some();
         // The budgets first: a run at its limit stopped on it, whatever the forecast.
+        let decided = verdicts.is_some_and(|v| v.decided());
         let reason = self
-            .stop_reason(error, elapsed_s, interrupt)
+            .stop_reason(error, decided, elapsed_s, interrupt)
             .or(unreachable.then_some(StopReason::Unreachable));
         self.progress.times.stats_s += stats_start.elapsed().as_secs_f64();
         reason
     }
 
-    /// The first stop criterion met after an epoch, if any (the target's `error` now).
+    /// The first stop criterion met after an epoch, if any (the target's `error` now,
+    /// whether every check is `decided` now).
     fn stop_reason(
         &self,
         error: f64,
+        decided: bool,
         elapsed_s: f64,
         interrupt: &AtomicBool,
     ) -> Option<StopReason> {
         let stop = &self.options.stop;
-        let decided = || {
-            let (scene, tallies) = (self.scene, &self.progress.tallies);
-            let visible = &self.engine.observer_visible;
-            stop.until == Some(Until::Decided)
-                && self
-                    .engine
-                    .pool
-                    .install(|| verdicts(scene, tallies, visible))
-                    .decided()
-        };
         if stop.target_error.is_some_and(|goal| error <= goal) {
             Some(StopReason::TargetError)
-        } else if decided() {
+        } else if decided && stop.until == Some(Until::Decided) {
             Some(StopReason::Decided)
         } else if stop
             .min_hits

@@ -51,6 +51,9 @@ pub fn merge(
         rel_error: error,
         forecast_s: None,
         forecast_photons: None,
+        checks: engine
+            .verdicts(scene, &merged.tallies, false)
+            .map(|v| v.counts()),
     });
     let merge_s = start.elapsed().as_secs_f64();
     merged.times = Times {

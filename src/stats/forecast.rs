@@ -15,6 +15,10 @@ pub struct HistoryPoint {
     pub forecast_s: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub forecast_photons: Option<u64>,
+    /// The checks of the scene's requirements passing, failing and undecided after this
+    /// epoch (absent without requirements, and for a shard).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub checks: Option<super::verdict::CheckCounts>,
 }
 
 /// A forecast of when the target error is reached.
@@ -82,6 +86,7 @@ fn photon_rate(history: &[HistoryPoint]) -> Option<f64> {
             rel_error: 0.0,
             forecast_s: None,
             forecast_photons: None,
+            checks: None,
         }
     };
     let dt = last.elapsed_s - first.elapsed_s;
@@ -100,6 +105,7 @@ mod tests {
             rel_error: err,
             forecast_s: None,
             forecast_photons: None,
+            checks: None,
         }
     }
 

@@ -291,6 +291,7 @@ mod tests {
             rel_error: 0.1,
             forecast_s: forecast.map(|p| p as f64 * 1e-6),
             forecast_photons: forecast,
+            checks: None,
         };
         let f = |photons| {
             Some(Forecast {

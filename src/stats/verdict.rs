@@ -120,6 +120,24 @@ impl Verdicts {
     pub fn decided(&self) -> bool {
         self.checks.iter().all(|c| c.outcome != Outcome::Undecided)
     }
+
+    /// How many checks pass, fail and are undecided.
+    pub fn counts(&self) -> CheckCounts {
+        let count = |o| self.checks.iter().filter(|c| c.outcome == o).count() as u32;
+        CheckCounts {
+            pass: count(Outcome::Pass),
+            fail: count(Outcome::Fail),
+            undecided: count(Outcome::Undecided),
+        }
+    }
+}
+
+/// The number of checks of each outcome at one epoch (the verdict's history).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CheckCounts {
+    pub pass: u32,
+    pub fail: u32,
+    pub undecided: u32,
 }
 
 /// The verdicts on `scene`'s requirements from `tallies`; `observer_visible` is, per
