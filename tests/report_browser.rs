@@ -4,7 +4,7 @@
 //! `data-chart` container), the page's error box must be empty and the console must
 //! show no uncaught error. Screenshots are saved as test artifacts in
 //! `<cargo target dir>/test-artifacts/` (`report.png`, `report_live.png`,
-//! `report_interrupted.png`, `report_edge.png`).
+//! `report_interrupted.png`, `report_edge.png`, `report_decided.png`).
 //!
 //! Without chromium (/usr/bin/chromium, or the path in `LUXTALLY_CHROMIUM`; scripts/setup.sh
 //! installs it) every test reports as ignored, with the reason: this file has its own
@@ -24,7 +24,7 @@ fn chromium_path() -> PathBuf {
 
 fn main() {
     let args = Arguments::from_args();
-    let tests: [(&str, fn()); 3] = [
+    let tests: [(&str, fn()); 4] = [
         (
             "report_of_a_finished_run_renders_every_chart_offline",
             report_of_a_finished_run_renders_every_chart_offline,
@@ -36,6 +36,10 @@ fn main() {
         (
             "report_of_dark_tall_and_luminance_receivers_renders",
             report_of_dark_tall_and_luminance_receivers_renders,
+        ),
+        (
+            "report_of_a_decided_run_draws_the_verdict_history",
+            report_of_a_decided_run_draws_the_verdict_history,
         ),
     ];
     let trials = tests
@@ -118,8 +122,14 @@ fn chromium(extra: &[&str], page: &Path) -> std::process::Output {
 }
 
 /// Opens `report` (through a copy, `view-NAME.html`: the run may rewrite the original) and checks that it rendered; saves
-/// `<artifacts>/name.png`.
-fn assert_report_renders(report: &Path, name: &str, receivers: usize) {
+/// `<artifacts>/name.png`. `other_charts`: the verdict history and the luminaires' polar
+/// diagrams. Returns the rendered page (the DOM).
+fn assert_report_renders(
+    report: &Path,
+    name: &str,
+    receivers: usize,
+    other_charts: usize,
+) -> String {
     let page = report.with_file_name(format!("view-{name}.html"));
     std::fs::copy(report, &page).expect("copy report");
     let dom = chromium(&["--dump-dom"], &page);
@@ -133,8 +143,8 @@ fn assert_report_renders(report: &Path, name: &str, receivers: usize) {
     let rendered = html.matches("data-rendered=\"1\"").count();
     assert_eq!(
         charts,
-        1 + 5 * receivers,
-        "{name}: accuracy chart + 5 per receiver"
+        1 + 5 * receivers + other_charts,
+        "{name}: accuracy chart + 5 per receiver + {other_charts} others"
     );
     assert_eq!(rendered, charts, "{name}: every chart rendered");
     assert_eq!(
@@ -174,6 +184,7 @@ fn assert_report_renders(report: &Path, name: &str, receivers: usize) {
         String::from_utf8_lossy(&out.stderr)
     );
     eprintln!("{name}: screenshot in {}", shot.display());
+    html.into_owned()
 }
 
 /// Points in the history of the summary embedded in a report page (`const S = {...};`).
@@ -216,7 +227,11 @@ fn report_of_a_finished_run_renders_every_chart_offline() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert_eq!(summary(&dir)["stop_reason"], "target_error");
-    assert_report_renders(&dir.join("report.html"), "report", 1);
+    let html = assert_report_renders(&dir.join("report.html"), "report", 1, 0);
+    assert!(
+        html.contains("data-contours=\""),
+        "the desk's map draws its isolux contours"
+    );
 }
 
 fn reports_of_a_live_run_and_of_a_run_stopped_by_ctrl_c_render() {
@@ -284,13 +299,14 @@ fn reports_of_a_live_run_and_of_a_run_stopped_by_ctrl_c_render() {
     for f in ["scene_map.ply", "receivers/desk.exr", "receivers/desk.png"] {
         assert!(dir.join(f).exists(), "{f} written on Ctrl-C");
     }
-    assert_report_renders(&live, "report_live", 1);
-    assert_report_renders(&report, "report_interrupted", 1);
+    assert_report_renders(&live, "report_live", 1, 0);
+    assert_report_renders(&report, "report_interrupted", 1, 0);
 }
 
 fn report_of_dark_tall_and_luminance_receivers_renders() {
     let dir = temp_dir("edge");
-    // A receiver no photon reaches (nothing scored), a 1 × 600 strip, a luminance meter.
+    // A receiver no photon reaches (nothing scored), a 1 × 600 strip, a luminance meter,
+    // a surround excluding its task area (gaps in its contours).
     let scene = r#"
 name = "edge"
 [materials.floor]
@@ -326,6 +342,19 @@ cells = [20, 20]
 quantity = "luminance"
 view_direction = [0, 0, -1]
 half_angle_deg = 10
+[[receivers]]
+name = "surround"
+corner = [0, 0, 0.01]
+u = [4, 0, 0]
+v = [0, 4, 0]
+cells = [8, 8]
+exclude = ["task"]
+[[receivers]]
+name = "task"
+corner = [1, 1, 0.01]
+u = [2, 0, 0]
+v = [0, 2, 0]
+cells = [4, 4]
 "#;
     let path = dir.join("edge.toml");
     std::fs::write(&path, scene).expect("scene written");
@@ -345,5 +374,43 @@ half_angle_deg = 10
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert_report_renders(&dir.join("out/report.html"), "report_edge", 3);
+    assert_report_renders(&dir.join("out/report.html"), "report_edge", 5, 0);
+}
+
+fn report_of_a_decided_run_draws_the_verdict_history() {
+    let dir = temp_dir("decided");
+    let out = Command::new(env!("CARGO_BIN_EXE_luxtally"))
+        .args(["run", "scenes/en12464_office.toml", "--until", "decided"])
+        .args(["--quiet", "--out", dir.to_str().unwrap()])
+        .output()
+        .expect("binary runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s = summary(&dir);
+    assert_eq!(s["stop_reason"], "decided");
+    let receivers = s["receivers"].as_object().unwrap().len();
+    let polar = s["luminaires"].as_array().unwrap().len();
+    let html = assert_report_renders(
+        &dir.join("report.html"),
+        "report_decided",
+        receivers,
+        1 + polar,
+    );
+    let decided = format!(
+        "decided after {} photons",
+        s["photons_emitted"]
+            .as_u64()
+            .unwrap()
+            .to_string()
+            .as_bytes()
+            .rchunks(3)
+            .rev()
+            .map(|c| std::str::from_utf8(c).unwrap())
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    assert!(html.contains(&decided), "the page says `{decided}`");
 }
