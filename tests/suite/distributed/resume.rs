@@ -11,6 +11,8 @@ const SCENE: &str = "scenes/office.toml";
 /// An area source: the direct light's replicates grow past the pilot during the run, so
 /// its schedule is part of what must come out the same.
 const CORNELL: &str = "scenes/cornell.toml";
+/// Requirements on many receivers and observers: the history counts their checks.
+const OFFICE_CHECKS: &str = "scenes/en12464_office.toml";
 
 fn luxtally(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_luxtally"))
@@ -133,16 +135,10 @@ fn wait_for_new_checkpoint(child: &mut Child, dir: &Path, before: &Option<Vec<u8
     }
 }
 
-#[test]
-fn killed_and_resumed_runs_end_bit_identical_to_an_uninterrupted_one() {
-    let full = temp_dir("full");
-    let base = [CORNELL, "--photons", "3000000", "--seed", "11", "--quiet"];
-    let mut args = vec!["run"];
-    args.extend(base);
-    args.extend(["--out", full.to_str().unwrap()]);
-    ok(luxtally(&args));
-
-    let dir = temp_dir("killed");
+/// Runs `run BASE` into `dir`, killed (SIGKILL) at random times after new checkpoints
+/// and resumed, a few rounds, then resumed to its end; asserts that it was killed and
+/// resumed at least once.
+fn kill_and_resume(base: &[&str], dir: &Path) {
     let d = dir.to_str().unwrap();
     let mut kills = 0;
     let mut resumes = 0;
@@ -158,7 +154,7 @@ fn killed_and_resumed_runs_end_bit_identical_to_an_uninterrupted_one() {
         }
         let before = std::fs::read(dir.join("checkpoint.bin")).ok();
         let mut child = spawn(&args);
-        if !wait_for_new_checkpoint(&mut child, &dir, &before) {
+        if !wait_for_new_checkpoint(&mut child, dir, &before) {
             break;
         }
         // Anywhere in the next few checkpoints, mid-epoch or mid-save.
@@ -177,6 +173,73 @@ fn killed_and_resumed_runs_end_bit_identical_to_an_uninterrupted_one() {
         kills >= 1 && resumes >= 1,
         "{kills} kills, {resumes} resumes"
     );
+}
+
+/// summary.json's history: per point, its photons, then its error and checks' counts as
+/// text (equal text is equal bits).
+fn history_of(dir: &Path) -> Vec<(u64, String)> {
+    let text = std::fs::read_to_string(dir.join("summary.json")).unwrap();
+    let s: Value = serde_json::from_str(&text).unwrap();
+    s["history"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| {
+            let numbers = format!("{} {}", p["rel_error"], p["checks"]);
+            (p["photons"].as_u64().unwrap(), numbers)
+        })
+        .collect()
+}
+
+/// A scene with requirements, killed and resumed: every point of its history, those
+/// saved in the checkpoints too, counts the checks, and at every photon count both runs
+/// reached (the epochs follow the clock, but end at every schedule point) the error and
+/// the counts are the uninterrupted run's.
+#[test]
+fn a_resumed_run_keeps_the_verdict_history_of_an_uninterrupted_one() {
+    let full = temp_dir("verdicts-full");
+    let base = [
+        OFFICE_CHECKS,
+        "--photons",
+        "2000000",
+        "--seed",
+        "3",
+        "--quiet",
+    ];
+    let mut args = vec!["run"];
+    args.extend(base);
+    args.extend(["--out", full.to_str().unwrap()]);
+    ok(luxtally(&args));
+    let dir = temp_dir("verdicts-killed");
+    kill_and_resume(&base, &dir);
+    let (a, b) = (history_of(&full), history_of(&dir));
+    for (photons, numbers) in a.iter().chain(&b) {
+        assert!(!numbers.ends_with("null"), "{photons} photons: no counts");
+    }
+    let uninterrupted: std::collections::HashMap<_, _> = a.iter().cloned().collect();
+    let mut common = 0;
+    for (photons, numbers) in &b {
+        if let Some(expected) = uninterrupted.get(photons) {
+            assert_eq!(numbers, expected, "at {photons} photons");
+            common += 1;
+        }
+    }
+    // The schedule points 4096 · 2^k up to 2·10⁶, and the end.
+    assert!(common >= 10, "{common} photon counts in common");
+    assert_eq!(a.last(), b.last());
+}
+
+#[test]
+fn killed_and_resumed_runs_end_bit_identical_to_an_uninterrupted_one() {
+    let full = temp_dir("full");
+    let base = [CORNELL, "--photons", "3000000", "--seed", "11", "--quiet"];
+    let mut args = vec!["run"];
+    args.extend(base);
+    args.extend(["--out", full.to_str().unwrap()]);
+    ok(luxtally(&args));
+
+    let dir = temp_dir("killed");
+    kill_and_resume(&base, &dir);
     assert_identical(&full, &dir);
     let s = numbers_of(&dir);
     assert_eq!(s["photons_emitted"], 3_000_000);

@@ -116,6 +116,49 @@ fn a_clear_shortfall_fails() {
     assert!(v.checks[0].margin_sigma < -3.0);
 }
 
+/// Every epoch's history point counts the checks passing, failing and undecided then:
+/// they add up to the checks, the last point's agree with the verdicts, the early
+/// epochs' σ decide nothing yet. Without requirements the points carry no counts, and
+/// summary.json's history no `checks`.
+#[test]
+fn history_points_count_the_checks_of_each_epoch() {
+    let (_, mean, _) = point_scene("");
+    let (toml, _, _) = point_scene(&format!(
+        "[[requirements]]\nreceiver = \"r\"\nem = {}\nu0 = 0.1\n",
+        1.5 * mean
+    ));
+    let scene = scene(&toml);
+    let s = run_options(&scene, &until_decided(&scene, 10_000_000, 3));
+    let v = s.verdicts.as_ref().expect("verdicts");
+    assert!(s.history.len() >= 3, "{} epochs", s.history.len());
+    for p in &s.history {
+        let c = p.checks.expect("every point counts the checks");
+        assert_eq!(
+            (c.pass + c.fail + c.undecided) as usize,
+            v.checks.len(),
+            "{p:?}"
+        );
+    }
+    assert_eq!(s.history.last().unwrap().checks, Some(v.counts()));
+    assert_eq!(
+        (v.counts().pass, v.counts().fail, v.counts().undecided),
+        (1, 1, 0)
+    );
+    assert!(
+        s.history[0].checks.unwrap().undecided > 0,
+        "{:?}",
+        s.history[0]
+    );
+
+    let (toml, _, _) = point_scene("");
+    let without = common::scene(&toml);
+    let plain = run_options(&without, &options(&without, 200_000, 2, Backend::Embree));
+    assert!(plain.verdicts.is_none() && plain.history.len() >= 2);
+    assert!(plain.history.iter().all(|p| p.checks.is_none()));
+    let json = serde_json::to_value(&plain.history).unwrap();
+    assert!(!json.to_string().contains("checks"), "{json}");
+}
+
 /// The bundled EN 12464-1 office (tasks, surrounding, walls, ceiling) passes every check,
 /// decided long before its 10⁷-photon budget.
 #[test]
