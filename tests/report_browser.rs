@@ -4,7 +4,8 @@
 //! `data-chart` container), the page's error box must be empty and the console must
 //! show no uncaught error. Screenshots are saved as test artifacts in
 //! `<cargo target dir>/test-artifacts/` (`report.png`, `report_live.png`,
-//! `report_interrupted.png`, `report_edge.png`, `report_decided.png`).
+//! `report_interrupted.png`, `report_edge.png`, `report_decided.png`). The template's
+//! marching squares (the isolux contours) also run there on small grids.
 //!
 //! Without chromium (/usr/bin/chromium, or the path in `LUXTALLY_CHROMIUM`; scripts/setup.sh
 //! installs it) every test reports as ignored, with the reason: this file has its own
@@ -24,7 +25,7 @@ fn chromium_path() -> PathBuf {
 
 fn main() {
     let args = Arguments::from_args();
-    let tests: [(&str, fn()); 4] = [
+    let tests: [(&str, fn()); 5] = [
         (
             "report_of_a_finished_run_renders_every_chart_offline",
             report_of_a_finished_run_renders_every_chart_offline,
@@ -40,6 +41,10 @@ fn main() {
         (
             "report_of_a_decided_run_draws_the_verdict_history",
             report_of_a_decided_run_draws_the_verdict_history,
+        ),
+        (
+            "contours_close_around_a_peak_skip_gaps_and_split_saddles",
+            contours_close_around_a_peak_skip_gaps_and_split_saddles,
         ),
     ];
     let trials = tests
@@ -413,4 +418,63 @@ fn report_of_a_decided_run_draws_the_verdict_history() {
             .join(",")
     );
     assert!(html.contains(&decided), "the page says `{decided}`");
+}
+
+/// The text of `function NAME(...) {...}` in the report's template (braces matched).
+fn template_function(template: &str, name: &str) -> String {
+    let start = template
+        .find(&format!("function {name}("))
+        .unwrap_or_else(|| panic!("report.html has no function {name}"));
+    let mut depth = 0;
+    for (k, c) in template[start..].char_indices() {
+        match c {
+            '{' => depth += 1,
+            '}' if depth == 1 => return template[start..=start + k].to_string(),
+            '}' => depth -= 1,
+            _ => {}
+        }
+    }
+    panic!("function {name} does not end");
+}
+
+/// The template's marching squares on small grids, in the browser: a peak in a 3 × 3
+/// grid is ringed by a closed diamond of four segments; an unknown centre (NaN) leaves
+/// every square without a line, a NaN corner its square; a saddle joins the corners its
+/// centre's mean sides with;
+/// the levels are round values strictly inside the known values' range.
+fn contours_close_around_a_peak_skip_gaps_and_split_saddles() {
+    let template = include_str!("../src/output/report.html");
+    let functions: Vec<String> = ["niceTicks", "minOf", "maxOf", "isoLines", "contourLevels"]
+        .iter()
+        .map(|f| template_function(template, f))
+        .collect();
+    let checks = r#"
+const out = [];
+const text = a => JSON.stringify(a, (k, v) => (typeof v === "number" ? Math.round(v * 1e9) / 1e9 : v));
+const same = (what, got, want) => { if (text(got) !== text(want)) out.push(what + ": " + text(got)); };
+same("peak", isoLines([0, 0, 0, 0, 10, 0, 0, 0, 0], 3, 3, 5),
+  [[[1.5, 1], [1, 1.5]], [[2, 1.5], [1.5, 1]], [[1, 1.5], [1.5, 2]], [[2, 1.5], [1.5, 2]]]);
+same("gap", isoLines([0, 0, 0, 0, NaN, 0, 0, 0, 0], 3, 3, 5), []);
+same("gap at a corner", isoLines([NaN, 0, 0, 10, 10, 10], 3, 2, 5), [[[2.5, 1], [1.5, 1]]]);
+same("saddle, centre high", isoLines([10, 0, 0, 10], 2, 2, 5), [[[1, 0.5], [1.5, 1]], [[1, 1.5], [0.5, 1]]]);
+same("saddle, centre low", isoLines([10, 0, 0, 10], 2, 2, 6), [[[0.5, 0.9], [0.9, 0.5]], [[1.5, 1.1], [1.1, 1.5]]]);
+same("levels", contourLevels([300, 350, NaN, 820]), [400, 500, 600, 700, 800]);
+same("flat", contourLevels([5, 5, NaN]), []);
+document.body.setAttribute("data-checks", out.length ? out.join("; ") : "ok");
+"#;
+    let dir = temp_dir("contours");
+    let page = dir.join("contours.html");
+    let html = format!(
+        "<!DOCTYPE html><html><body><script>\n{}\n{checks}</script></body></html>",
+        functions.join("\n")
+    );
+    std::fs::write(&page, html).expect("page written");
+    let dom = chromium(&["--dump-dom"], &page);
+    let text = String::from_utf8_lossy(&dom.stdout);
+    assert!(
+        text.contains("data-checks=\"ok\""),
+        "{}\n{}",
+        text,
+        String::from_utf8_lossy(&dom.stderr)
+    );
 }
