@@ -35,7 +35,9 @@ pub use area::Area;
 pub use directional::Directional;
 pub use luminaire::{Luminaire, MaintenanceFile};
 pub use point::Point;
+pub use sky::Sky;
 pub use spot::{spot_profile, Spot};
+pub use sun::Sun;
 
 /// The kinds of `[[lights]]` entry (their `type`s are the entries' `LightFile::TYPE`):
 /// one line per kind, `module::EntryStruct`, declaring the module too.
@@ -52,7 +54,11 @@ registry! {
     directional::DirectionalFile,
     area::AreaFile,
     luminaire::LuminaireFile,
+    sky::SkyFile,
+    sun::SunFile,
 }
+
+pub mod distant;
 
 /// A validated light source, world coordinates.
 pub trait Light: Debug + Send + Sync + Any {

@@ -24,6 +24,7 @@ mod physics {
     mod calibration;
     mod custom_light;
     mod cylindrical;
+    mod daylight;
     mod direct_light;
     mod extremes;
     mod figures;

@@ -51,6 +51,9 @@ enum Command {
     /// The CIE 190:2010 UGR table of a photometric file (IES LM-63 or EULUMDAT): 19
     /// rooms, crosswise and endwise, 5 reflectance sets, at 1000 lm; CSV and plot if asked.
     UgrTable(ugr_table::UgrTableArgs),
+    /// Print each sky's and sun's model, zenith luminance, horizontal illuminance, sun
+    /// position and ground luminance (the `type = "sky"` and `"sun"` lights of SCENE).
+    Sky { scene: PathBuf },
     /// List the EN 12464-1 task types a requirement's `task` can name, with their values.
     Tasks,
     /// Ray throughput of every backend and ray API on a scene (incoherent random rays),
@@ -80,6 +83,7 @@ fn main() -> ExitCode {
         Command::Report { out_dir } => luxtally::output::rebuild_report(&out_dir),
         Command::Photometry(args) => photometry::command(args),
         Command::UgrTable(args) => ugr_table::command(args),
+        Command::Sky { scene } => sky_command(&scene),
         Command::Tasks => {
             print!("{}", luxtally::scene::tasks::table_text());
             Ok(())
@@ -97,6 +101,26 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// `luxtally sky SCENE`: the scene's daylight sources, described.
+fn sky_command(path: &std::path::Path) -> luxtally::Result<()> {
+    use luxtally::light::{Sky, Sun};
+    let scene = luxtally::scene::load(path)?;
+    let mut any = false;
+    for l in &scene.lights {
+        let text = match (l.get::<Sky>(), l.get::<Sun>()) {
+            (Some(sky), _) => sky.describe_full(),
+            (None, Some(sun)) => luxtally::light::Light::describe(sun),
+            _ => continue,
+        };
+        println!("{}: {text}", l.label);
+        any = true;
+    }
+    if !any {
+        println!("{}: no type = \"sky\" or \"sun\" lights", path.display());
+    }
+    Ok(())
 }
 
 /// What clap refused, on one line: exit 2 for bad usage; exit 1, as for any bad input,

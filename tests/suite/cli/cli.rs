@@ -312,3 +312,31 @@ fn tasks_lists_the_task_types() {
         );
     }
 }
+
+/// `luxtally sky SCENE` describes each sky and sun: model, Lz, horizontal illuminance,
+/// the sun's position.
+#[test]
+fn sky_describes_the_daylight_sources() {
+    let dir = temp_dir("sky-command");
+    let scene = dir.join("day.toml");
+    std::fs::write(
+        &scene,
+        "[[lights]]\ntype = \"sky\"\ncie_type = 16\nhorizontal_illuminance_lx = 7000\n\
+         [[lights]]\ntype = \"sun\"\ndirect_normal_lx = 50000\nsun_altitude_deg = 40\nsun_azimuth_deg = 135\n\
+         [[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\ncells = [1, 1]\n",
+    )
+    .unwrap();
+    let out = luxtally(&["sky", scene.to_str().unwrap()]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    // Type 16: E_h = 7π/9·Lz, so Lz = 7000·9/(7π) = 2864.79 cd/m².
+    for needle in [
+        "traditional overcast",
+        "Lz 2864.79",
+        "7000.0 lx",
+        "altitude 40.000°",
+        "azimuth 135.000°",
+    ] {
+        assert!(text.contains(needle), "`{needle}` not in: {text}");
+    }
+}

@@ -1,0 +1,222 @@
+//! Light from infinitely far away with a luminance L(ω) over the sphere of directions
+//! (skies, the sun, the ground they light): what `sky.rs` and `sun.rs` share.
+//!
+//! The sphere is cut into regions (bands of z = cos θ and azimuth, cones, the lower
+//! hemisphere), each with a rigorous upper bound of L over it. Photons pick a region in
+//! proportion to bound × solid angle, a direction uniformly in it, and keep it with
+//! probability L/bound (rejection): directions come exactly in proportion to L, so
+//! every photon carries the same flux πR²·∫L dω / N through the scene's disk of radius
+//! R normal to its direction. Next-event pieces use the same regions without the
+//! rejection and carry L(ω)/p(ω) exactly.
+
+use super::{Emitter, Incoming};
+use crate::sampling::{basis, uniform, uniform_disk};
+use glam::DVec3;
+use rand_pcg::Pcg32;
+use std::f64::consts::PI;
+use std::sync::Arc;
+
+/// A part of the sphere of directions (towards the source).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Region {
+    /// z0 ≤ z < z1 and φ0 ≤ φ < φ1 (world z up; φ from +x towards +y).
+    Band { z: [f64; 2], phi: [f64; 2] },
+    /// Directions within the angle whose cosine is `cos_max` of `axis` (unit).
+    Cone { axis: DVec3, cos_max: f64 },
+}
+
+impl Region {
+    pub fn solid_angle_sr(&self) -> f64 {
+        match *self {
+            Region::Band { z, phi } => (z[1] - z[0]) * (phi[1] - phi[0]),
+            Region::Cone { cos_max, .. } => 2.0 * PI * (1.0 - cos_max),
+        }
+    }
+
+    /// The direction at (a, b) ∈ [0, 1)², uniform in solid angle.
+    pub fn direction(&self, a: f64, b: f64) -> DVec3 {
+        match *self {
+            Region::Band { z, phi } => {
+                let z = z[0] + a * (z[1] - z[0]);
+                let phi = phi[0] + b * (phi[1] - phi[0]);
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                DVec3::new(r * libm::cos(phi), r * libm::sin(phi), z)
+            }
+            Region::Cone { axis, cos_max } => {
+                let cos = 1.0 - a * (1.0 - cos_max);
+                let sin = (1.0 - cos * cos).max(0.0).sqrt();
+                let phi = 2.0 * PI * b;
+                let (t, s) = basis(axis);
+                (t * (sin * libm::cos(phi)) + s * (sin * libm::sin(phi)) + axis * cos).normalize()
+            }
+        }
+    }
+
+    /// The lower hemisphere (the ground seen from above it).
+    pub fn ground() -> Region {
+        Region::Band {
+            z: [-1.0, 0.0],
+            phi: [0.0, 2.0 * PI],
+        }
+    }
+}
+
+/// Luminance of a distant source towards direction `w` (unit, towards the source), cd/m².
+pub type LuminanceFn = Arc<dyn Fn(DVec3) -> f64 + Send + Sync>;
+
+/// The regions, their bounds and the cumulative weights they are picked by.
+#[derive(Clone)]
+pub struct DistantTable {
+    regions: Vec<Region>,
+    bounds: Vec<f64>,
+    /// Cumulative Σ bound·Ω, ending at `total`.
+    cdf: Vec<f64>,
+    total: f64,
+    luminance: LuminanceFn,
+}
+
+impl std::fmt::Debug for DistantTable {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "DistantTable({} regions)", self.regions.len())
+    }
+}
+
+impl DistantTable {
+    /// `parts`: each region with an upper bound of L over it (regions of bound 0 are
+    /// dropped: nothing comes from there).
+    pub fn new(parts: Vec<(Region, f64)>, luminance: LuminanceFn) -> DistantTable {
+        let (mut regions, mut bounds, mut cdf) = (Vec::new(), Vec::new(), Vec::new());
+        let mut total = 0.0;
+        for (region, bound) in parts {
+            if bound > 0.0 {
+                total += bound * region.solid_angle_sr();
+                regions.push(region);
+                bounds.push(bound);
+                cdf.push(total);
+            }
+        }
+        DistantTable {
+            regions,
+            bounds,
+            cdf,
+            total,
+            luminance,
+        }
+    }
+
+    pub fn is_dark(&self) -> bool {
+        !(self.total > 0.0)
+    }
+
+    /// The region `u` ∈ [0, 1) falls in by the weights, and where in its share (∈ [0, 1)).
+    fn pick(&self, u: f64) -> (usize, f64) {
+        let x = u * self.total;
+        let k = self
+            .cdf
+            .partition_point(|&c| c <= x)
+            .min(self.cdf.len() - 1);
+        let lo = if k == 0 { 0.0 } else { self.cdf[k - 1] };
+        let width = self.cdf[k] - lo;
+        let frac = if width > 0.0 { (x - lo) / width } else { 0.5 };
+        (k, frac.clamp(0.0, 1.0 - f64::EPSILON))
+    }
+
+    /// A direction drawn exactly in proportion to L (rejection against the bounds).
+    pub fn sample(&self, rng: &mut Pcg32) -> DVec3 {
+        loop {
+            let (k, _) = self.pick(uniform(rng));
+            let w = self.regions[k].direction(uniform(rng), uniform(rng));
+            if uniform(rng) * self.bounds[k] < (self.luminance)(w) {
+                return w;
+            }
+        }
+    }
+
+    /// The direction for the pattern point (a, b) and its weight L(ω)/p(ω), lx·sr/sr.
+    pub fn piece(&self, a: f64, b: f64) -> (DVec3, f64) {
+        let (k, frac) = self.pick(a);
+        let w = self.regions[k].direction(frac, b);
+        // p(ω) = bound_k / total (uniform within the region, picked by bound·Ω).
+        (w, (self.luminance)(w) * self.total / self.bounds[k])
+    }
+
+    pub fn luminance(&self, w: DVec3) -> f64 {
+        (self.luminance)(w)
+    }
+}
+
+/// A distant source prepared for the passes: photons start on a disk of the scene's
+/// radius outside the scene, normal to their direction.
+#[derive(Clone, Debug)]
+pub struct DistantEmitter {
+    pub table: DistantTable,
+    /// Centre (local frame) and radius of the scene's bounding sphere.
+    pub center: DVec3,
+    pub radius: f64,
+}
+
+impl Emitter for DistantEmitter {
+    fn sample_emission(&self, rng: &mut Pcg32) -> (DVec3, DVec3) {
+        let w = self.table.sample(rng);
+        let disk = self.center + w * (self.radius * 1.01);
+        (uniform_disk(rng, disk, -w, self.radius), -w)
+    }
+
+    fn incoming(&self, _: DVec3, area_pattern: &[(f64, f64)], each: &mut dyn FnMut(Incoming)) {
+        if self.table.is_dark() {
+            return;
+        }
+        let pieces = area_pattern.len().max(1) as f64;
+        for &(a, b) in area_pattern {
+            let (w, weight) = self.table.piece(a, b);
+            if weight > 0.0 {
+                each(Incoming {
+                    to_source: w,
+                    distance: f64::INFINITY,
+                    normal_lx: weight / pieces,
+                });
+            }
+        }
+    }
+
+    /// The whole sky: a pattern of the camera's largest size.
+    fn extent(&self) -> (DVec3, f64) {
+        (self.center, f64::INFINITY)
+    }
+
+    fn luminance_seen(&self, _o: DVec3, dir: DVec3, t_hit: f64) -> Option<f64> {
+        (!t_hit.is_finite()).then(|| self.table.luminance(dir.normalize()))
+    }
+}
+
+/// The upper hemisphere in `nz` bands of z and `nphi` of azimuth: the regions a sky
+/// is tabulated on.
+pub fn hemisphere_bands(nz: usize, nphi: usize) -> impl Iterator<Item = Region> {
+    (0..nz * nphi).map(move |k| {
+        let (i, j) = ((k / nphi) as f64, (k % nphi) as f64);
+        let dphi = 2.0 * PI / nphi as f64;
+        Region::Band {
+            z: [i / nz as f64, (i + 1.0) / nz as f64],
+            phi: [j * dphi, (j + 1.0) * dphi],
+        }
+    })
+}
+
+/// The least and greatest angle (rad) between unit `s` and the directions of `band`:
+/// the farthest point of a z–φ band from any direction is one of its corners, and the
+/// nearest lies no nearer than the centre's distance less the farthest corner's.
+pub fn angle_range(band: &Region, s: DVec3) -> (f64, f64) {
+    let Region::Band { .. } = band else {
+        return (0.0, PI);
+    };
+    let centre = band.direction(0.5, 0.5);
+    let corners =
+        [(0.0, 0.0), (0.0, 1.0), (1.0, 0.0), (1.0, 1.0)].map(|(a, b)| band.direction(a, b));
+    let angle = |p: DVec3, q: DVec3| libm::acos(p.dot(q).clamp(-1.0, 1.0));
+    let radius = corners
+        .iter()
+        .map(|&c| angle(centre, c))
+        .fold(0.0, f64::max);
+    let chi = angle(centre, s);
+    ((chi - radius).max(0.0), (chi + radius).min(PI))
+}
