@@ -8,6 +8,7 @@ use crate::stats::figures::{self, Figures};
 use crate::stats::forecast::HistoryPoint;
 use crate::stats::null_as_nan;
 use crate::stats::stop::Target;
+use crate::stats::ugr_table;
 use crate::stats::verdict::{verdicts, Verdicts};
 use crate::stats::{
     cell_vov, direct_estimate, figure_of_merit, map_stats, mean_illuminance_sigma_lx,
@@ -117,6 +118,10 @@ pub struct LuminaireSummary {
     pub opening: String,
     /// The polar diagram (C0–180, C90–270 in cd/klm), a base64 PNG.
     pub polar_png_base64: String,
+    /// Its CIE 190 UGR table (SHR 0.25, 1000 lm: `luxtally ugr-table`'s plot), a base64
+    /// PNG; empty where it cannot be rated (a point opening).
+    #[serde(default)]
+    pub ugr_table_png_base64: String,
 }
 
 #[derive(Serialize, Deserialize, Default)]
@@ -413,6 +418,10 @@ fn luminaires(scene: &crate::scene::Scene) -> Vec<LuminaireSummary> {
             symmetry: p.symmetry.describe().to_string(),
             opening: p.opening.describe(),
             polar_png_base64: crate::photometry::polar::polar_diagram_png(p)
+                .map(|png| base64::engine::general_purpose::STANDARD.encode(png))
+                .unwrap_or_default(),
+            ugr_table_png_base64: ugr_table::table(p, 0.25, ugr_table::REFERENCE_FLUX_LM)
+                .and_then(|t| ugr_table::plot_png(&t))
                 .map(|png| base64::engine::general_purpose::STANDARD.encode(png))
                 .unwrap_or_default(),
         });
