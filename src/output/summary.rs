@@ -4,7 +4,7 @@
 
 use crate::run::RunState;
 use crate::scene::Estimator;
-use crate::stats::figures::{self, Figures};
+use crate::stats::figures::{self, Figure, Figures};
 use crate::stats::forecast::HistoryPoint;
 use crate::stats::null_as_nan;
 use crate::stats::stop::Target;
@@ -193,6 +193,34 @@ pub struct ReceiverSummary {
     /// which are over all cells).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub excluded_cells: Vec<usize>,
+    /// The values as a daylight factor (`daylight_factor = true`; docs/daylight.md).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub daylight_factor: Option<DaylightFactorSummary>,
+}
+
+/// A receiver's illuminance as daylight factors DF = 100·E/E_out, %.
+#[derive(Serialize, Deserialize, Default)]
+#[serde(default)]
+pub struct DaylightFactorSummary {
+    /// E_out: the sky's illuminance on an unobstructed horizontal plane (exact), lx.
+    pub outside_lx: f64,
+    pub sky: String,
+    /// Per cell, %, and σ (null where unknown): `values` × 100/E_out, exactly.
+    #[serde(deserialize_with = "null_as_nan::vec")]
+    pub values: Vec<f64>,
+    #[serde(deserialize_with = "null_as_nan::vec")]
+    pub sigma: Vec<f64>,
+    /// The sky component (the sky seen directly through the openings: the sampled
+    /// direct part) and the reflected components (externally and internally reflected
+    /// together: the rest), %; empty when the direct light is not sampled apart (track).
+    #[serde(deserialize_with = "null_as_nan::vec")]
+    pub sky_component: Vec<f64>,
+    #[serde(deserialize_with = "null_as_nan::vec")]
+    pub reflected: Vec<f64>,
+    /// The mean and least DF over the included cells, with their intervals
+    /// (`figures`' mean and min, scaled).
+    pub mean: Figure,
+    pub min: Figure,
 }
 
 #[derive(Serialize, Deserialize, Default)]
@@ -346,6 +374,14 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
     let receivers = &state.scene.receivers;
     let figures = figures::receiver_figures(state.scene, t, index);
     let (quantity, unit) = (r.quantity.name(), r.quantity.unit());
+    let daylight = daylight_factor(
+        state.scene,
+        index,
+        &stats.values,
+        &stats.sigma,
+        &direct,
+        &figures,
+    );
     ReceiverSummary {
         quantity: quantity.into(),
         unit: unit.into(),
@@ -373,10 +409,57 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
         dark_cells: stats.dark_cells,
         dark_upper_bound: stats.dark_bound,
         figures,
+        daylight_factor: daylight,
         excluded_cells: (r.excluded_cells(receivers).iter().enumerate())
             .filter_map(|(k, &x)| x.then_some(k))
             .collect(),
     }
+}
+
+/// Receiver `index`'s daylight factors, if it asks for them: its values, σ, direct part
+/// and figures (Ē, Emin) times 100/E_out.
+fn daylight_factor(
+    scene: &crate::scene::Scene,
+    index: usize,
+    values: &[f64],
+    sigma: &[f64],
+    direct: &[(f64, f64)],
+    figures: &Figures,
+) -> Option<DaylightFactorSummary> {
+    let df = scene.daylight_factor.as_ref()?;
+    if !df.receivers.contains(&index) {
+        return None;
+    }
+    let k = 100.0 / df.outside_lx;
+    let scaled = |xs: &[f64]| xs.iter().map(|x| x * k).collect::<Vec<f64>>();
+    let sampled = direct.iter().any(|d| d.0 != 0.0 || d.1 != 0.0);
+    let figure = |f: &Figure| Figure {
+        value: f.value * k,
+        low: f.low * k,
+        high: f.high * k,
+    };
+    Some(DaylightFactorSummary {
+        outside_lx: df.outside_lx,
+        sky: df.sky.clone(),
+        values: scaled(values),
+        sigma: scaled(sigma),
+        sky_component: if sampled {
+            direct.iter().map(|d| d.0 * k).collect()
+        } else {
+            Vec::new()
+        },
+        reflected: if sampled {
+            values
+                .iter()
+                .zip(direct)
+                .map(|(v, d)| (v - d.0) * k)
+                .collect()
+        } else {
+            Vec::new()
+        },
+        mean: figure(&figures.mean),
+        min: figure(&figures.min),
+    })
 }
 
 /// The scene map's summary: total and indirect illuminance over every triangle.

@@ -282,6 +282,8 @@ pub struct ReceiverFile {
     /// Receivers whose areas this one's figures leave out (a task area inside its
     /// surrounding).
     pub exclude: Option<Vec<String>>,
+    /// Report the illuminance as a daylight factor too (an overcast sky the only light).
+    pub daylight_factor: Option<bool>,
 }
 
 /// `values = "cell_average" | "point"`: what a receiver's cells score.

@@ -59,8 +59,12 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
     let modelling_with: Vec<Option<String>> = (raw.receivers.iter())
         .map(|r| r.modelling_with.clone())
         .collect();
+    let daylight_factor: Vec<usize> = (raw.receivers.iter().enumerate())
+        .filter_map(|(i, r)| (r.daylight_factor == Some(true)).then_some(i))
+        .collect();
     let mut receivers = receivers(raw.receivers, origin)?;
     let modelling = requirements::modelling_pairs(&modelling_with, &receivers, origin)?;
+    let daylight_factor = daylight_factor_of(daylight_factor, &receivers, &lights, origin)?;
     let observers = super::observers::observers(raw.observers, &lights, &mut receivers, origin)?;
     let requirements =
         requirements::requirements(raw.requirements, &receivers, &modelling, &observers, origin)?;
@@ -85,10 +89,66 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         receivers,
         requirements,
         modelling,
+        daylight_factor,
         simulation,
         camera,
         observers,
     })
+}
+
+/// The daylight-factor receivers (indices), validated: illuminance receivers, under a
+/// CIE overcast sky (type 1 or 16, as EN 17037 allows) that is the scene's only light.
+fn daylight_factor_of(
+    receivers_with: Vec<usize>,
+    receivers: &[Receiver],
+    lights: &[SceneLight],
+    origin: &str,
+) -> Result<Option<super::DaylightFactor>> {
+    use crate::light::sky::{Sky, SkyModel};
+    let Some(&first) = receivers_with.first() else {
+        return Ok(None);
+    };
+    let at = format!("{origin}: receivers[{first}].daylight_factor");
+    if let Some(&k) =
+        (receivers_with.iter()).find(|&&k| receivers[k].quantity != Quantity::Illuminance)
+    {
+        return Err(Error::input(
+            format!("{origin}: receivers[{k}].daylight_factor"),
+            "applies only to quantity = \"illuminance\"",
+        ));
+    }
+    fn overcast(l: &SceneLight) -> Option<&Sky> {
+        l.get::<Sky>().filter(|s| {
+            matches!(
+                s.model,
+                SkyModel::TraditionalOvercast | SkyModel::Cie { kind: 1, .. }
+            )
+        })
+    }
+    match lights {
+        [only] => match overcast(only) {
+            Some(sky) => Ok(Some(super::DaylightFactor {
+                receivers: receivers_with,
+                outside_lx: sky.horizontal_lx,
+                sky: crate::light::Light::describe(sky),
+            })),
+            None => Err(Error::input(
+                at,
+                format!(
+                    "needs a CIE overcast sky (type = \"sky\", cie_type = 1 or 16); `{}` is not one",
+                    only.label
+                ),
+            )),
+        },
+        _ => Err(Error::input(
+            at,
+            format!(
+                "needs a CIE overcast sky (cie_type 1 or 16) as the scene's only light, \
+                 and the scene has {} lights",
+                lights.len()
+            ),
+        )),
+    }
 }
 
 /// The `[[lights]]` entries, each read by its kind (`crate::light`).

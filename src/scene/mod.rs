@@ -387,6 +387,17 @@ impl Receiver {
     }
 }
 
+/// Receivers reported as daylight factors DF = 100·E/E_out (docs/daylight.md).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DaylightFactor {
+    /// Indices into the scene's receivers.
+    pub receivers: Vec<usize>,
+    /// E_out: the sky's illuminance on an unobstructed horizontal plane, exact, lx.
+    pub outside_lx: f64,
+    /// Which sky it is under (its description).
+    pub sky: String,
+}
+
 /// Confidence of the receivers' figures' intervals unless the scene says otherwise.
 pub const DEFAULT_CONFIDENCE: f64 = 0.95;
 
@@ -425,6 +436,9 @@ pub struct Scene {
     pub requirements: Vec<Requirement>,
     /// The cylindrical receivers with `modelling_with`: their modelling ratio Ēz/Ēh.
     pub modelling: Vec<ModellingPair>,
+    /// The receivers with `daylight_factor = true` and the unobstructed horizontal
+    /// illuminance of the scene's overcast sky their daylight factor divides by.
+    pub daylight_factor: Option<DaylightFactor>,
     pub simulation: Simulation,
     /// The `[camera]` of `luxtally render`, if the file has one.
     pub camera: Option<Camera>,

@@ -225,6 +225,16 @@ fn receiver_line(r: &summary::ReceiverSummary) -> String {
             r.dark_cells, r.dark_upper_bound, r.unit
         );
     }
+    if let Some(df) = &r.daylight_factor {
+        flags += &format!(
+            "; daylight factor {:.3} % ({} % in {:.3}–{:.3} %, least cell {:.3} %)",
+            df.mean.value,
+            100.0 * r.figures.confidence,
+            df.mean.low,
+            df.mean.high,
+            df.min.value
+        );
+    }
     format!("mean {:.4} {}, {error}{flags}", r.mean, r.unit)
 }
 

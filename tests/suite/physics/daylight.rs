@@ -325,3 +325,106 @@ fn bad_skies_and_suns_are_rejected_in_one_line() {
         assert!(e.contains("lights[0]") && !e.contains('\n'), "{e}");
     }
 }
+
+/// E at a floor point `(x, y)` of [`roof_opening`] under the traditional overcast sky of
+/// zenith luminance 1: ∫ over the opening of L(ω)·cos²/r² dA with cos = h/r and
+/// L = (1 + 2h/r)/3, by 8 × 8 Gauss–Legendre on 4 × 4 panels.
+fn overcast_through_opening(x: f64, y: f64, h: f64) -> f64 {
+    let f = |a: f64, b: f64| {
+        let r2 = (a - x) * (a - x) + (b - y) * (b - y) + h * h;
+        let r = r2.sqrt();
+        (1.0 + 2.0 * h / r) / 3.0 * h * h / (r2 * r2)
+    };
+    let mut sum = 0.0;
+    for p in 0..16 {
+        let (a0, b0) = (1.5 + (p % 4) as f64 * 0.25, 1.5 + (p / 4) as f64 * 0.25);
+        sum += cell_average(f, a0, a0 + 0.25, b0, b0 + 0.25) * 0.0625;
+    }
+    sum
+}
+
+/// The daylight factor under the traditional overcast sky: 100 % on an open plane
+/// (exactly, E_out being the sky's own integral), and through the roof opening every
+/// cell against 100·E/E_out with E_out = 7π/9·Lz, z-calibrated; the sky component is
+/// all of it in a black box, and the mean's interval covers the exact mean.
+#[test]
+fn daylight_factor_is_the_share_of_the_unobstructed_sky() {
+    let open = scene(
+        &sky_scene("cie_type = 16\nzenith_luminance_cdm2 = 3000", 1000)
+            .replace("cells = [2, 2]", "cells = [2, 2]\ndaylight_factor = true"),
+    );
+    let s = run_with(&open, 20_000, Estimator::NextEvent, 3);
+    let df = s.receivers["open"]
+        .daylight_factor
+        .as_ref()
+        .expect("a daylight factor");
+    assert!((df.outside_lx - 3000.0 * 7.0 * PI / 9.0).abs() < 1e-6 * df.outside_lx);
+    let z: Vec<f64> = (df.values.iter().zip(&df.sigma))
+        .map(|(v, s)| (v - 100.0) / s)
+        .collect();
+    assert!(z.iter().all(|z| z.abs() < 5.0), "{z:?}");
+    let text = roof_opening(
+        "[[lights]]\ntype = \"sky\"\ncie_type = 16\nzenith_luminance_cdm2 = 1\nground_reflectance = 0\n",
+    )
+    .replace("cells = [16, 16]", "cells = [16, 16]\ndaylight_factor = true");
+    let scene = scene(&text);
+    let h = 3.0 - 0.001;
+    let exact = |i: usize, j: usize| {
+        let (x0, y0) = (i as f64 * 0.25, j as f64 * 0.25);
+        let e = cell_average(
+            |x, y| overcast_through_opening(x, y, h),
+            x0,
+            x0 + 0.25,
+            y0,
+            y0 + 0.25,
+        );
+        100.0 * e / (7.0 * PI / 9.0)
+    };
+    let s = run_with(&scene, 600_000, Estimator::NextEvent, 4);
+    let r = &s.receivers["floor"];
+    let df = r.daylight_factor.as_ref().expect("a daylight factor");
+    let mut z = Vec::new();
+    for (k, (v, sigma)) in df.values.iter().zip(&df.sigma).enumerate() {
+        z.push((v - exact(k % 16, k / 16)) / sigma);
+        assert!(
+            (df.sky_component[k] - v).abs() <= 1e-9 * v.abs().max(1e-12),
+            "black box: all sky"
+        );
+        assert!(df.reflected[k].abs() <= 1e-9 * v.abs().max(1e-12));
+    }
+    assert_calibrated(&z, "daylight factor through a roof opening");
+    let mean_exact = (0..256).map(|k| exact(k % 16, k / 16)).sum::<f64>() / 256.0;
+    assert!(
+        df.mean.low <= mean_exact && mean_exact <= df.mean.high,
+        "{:?} against {mean_exact}",
+        (df.mean.low, df.mean.high)
+    );
+}
+
+#[test]
+fn bad_daylight_factor_receivers_are_rejected_in_one_line() {
+    let with = |keys: &str| {
+        sky_scene(keys, 1000).replace("cells = [2, 2]", "cells = [2, 2]\ndaylight_factor = true")
+    };
+    let sun = "\n[[lights]]\ntype = \"sun\"\ndirect_normal_lx = 1000\nsun_altitude_deg = 30\nsun_azimuth_deg = 0\n";
+    let cases = [
+        (with("cie_type = 12\nsun_altitude_deg = 30\nsun_azimuth_deg = 0\nzenith_luminance_cdm2 = 1"), "cie_type = 1 or 16"),
+        (with(&format!("cie_type = 16\nzenith_luminance_cdm2 = 1{sun}")), "only light"),
+        (
+            with("cie_type = 16\nzenith_luminance_cdm2 = 1")
+                .replace("daylight_factor = true", "daylight_factor = true\nquantity = \"cylindrical\""),
+            "quantity = \"illuminance\"",
+        ),
+    ];
+    for (text, needle) in cases {
+        let e = match luxtally::scene::load_str(&text, std::path::Path::new("."), "day.toml") {
+            Ok(_) => panic!("loaded: {text}"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            e.contains(needle) && e.contains("receivers[0].daylight_factor"),
+            "`{needle}` not in: {e}"
+        );
+        assert!(!e.contains('\n'), "{e}");
+    }
+}
