@@ -128,7 +128,7 @@ fn chromium(extra: &[&str], page: &Path) -> std::process::Output {
 
 /// Opens `report` (through a copy, `view-NAME.html`: the run may rewrite the original) and checks that it rendered; saves
 /// `<artifacts>/name.png`. `other_charts`: the verdict history and the luminaires' polar
-/// diagrams. Returns the rendered page (the DOM).
+/// diagrams and UGR tables. Returns the rendered page (the DOM).
 fn assert_report_renders(
     report: &Path,
     name: &str,
@@ -397,12 +397,18 @@ fn report_of_a_decided_run_draws_the_verdict_history() {
     let s = summary(&dir);
     assert_eq!(s["stop_reason"], "decided");
     let receivers = s["receivers"].as_object().unwrap().len();
-    let polar = s["luminaires"].as_array().unwrap().len();
+    // Per photometric file: its polar diagram and, where it can be rated, its CIE 190
+    // UGR table.
+    let luminaires = s["luminaires"].as_array().unwrap();
+    let tables = (luminaires.iter())
+        .filter(|l| !l["ugr_table_png_base64"].as_str().unwrap_or("").is_empty())
+        .count();
+    assert!(tables > 0, "examp1.ies can be rated");
     let html = assert_report_renders(
         &dir.join("report.html"),
         "report_decided",
         receivers,
-        1 + polar,
+        1 + luminaires.len() + tables,
     );
     let decided = format!(
         "decided after {} photons",
