@@ -8,7 +8,8 @@
 //! A material is a weighted sum of lobes whose weights (albedos) sum to at most 1, each
 //! a [`Lobe`], one file each: [`Lambertian`] reflection ρ and transmission τ
 //! (`lambertian.rs`), an ideal [`Mirror`] (`mirror.rs`), an ideal dielectric ([`Glass`],
-//! `glass.rs`: Fresnel reflection and refraction), and [`Glossy`] (`glossy.rs`): a rough
+//! `glass.rs`: Fresnel reflection and refraction), thin [`Glazing`] (`glazing.rs`: panes
+//! whose R(θ) and T(θ) sum their internal reflections), and [`Glossy`] (`glossy.rs`): a rough
 //! reflector and a rough dielectric, both GGX (Trowbridge–Reitz) microfacet lobes with
 //! Smith's height-correlated shadowing, sampled by visible normals (Heitz 2018, as in
 //! pbrt-v4's `TrowbridgeReitzDistribution`, `ConductorBxDF` and `DielectricBxDF`), whose
@@ -26,12 +27,14 @@
 
 pub mod fresnel;
 mod glass;
+mod glazing;
 mod glossy;
 mod lambertian;
 pub mod microfacet;
 mod mirror;
 
 pub use glass::Glass;
+pub use glazing::{Glazing, DEFAULT_GLAZING_IOR};
 pub use glossy::Glossy;
 pub use lambertian::Lambertian;
 pub use microfacet::Frame;
@@ -202,6 +205,8 @@ pub struct Material {
     pub glossy_transmittance: f64,
     /// Perceptual roughness of the glossy lobes, in (0, 1]; GGX α = roughness².
     pub roughness: f64,
+    /// Thin glazing, the whole surface (no other part): its panes and their index.
+    pub glazing: Option<Glazing>,
 }
 
 /// A `[materials.KEY]` entry as written.
@@ -224,6 +229,12 @@ pub struct MaterialFile {
     pub glossy_transmittance: f64,
     /// Required when a glossy part is set.
     pub roughness: Option<f64>,
+    /// Thin glazing: each pane's normal transmittance Tn, outermost first.
+    pub glazing: Option<Vec<f64>>,
+    /// The same by each pane's transmissivity tn (Radiance's `glass`).
+    pub glazing_transmissivity: Option<Vec<f64>>,
+    /// The panes' index of refraction (1.52 by default).
+    pub glazing_ior: Option<f64>,
 }
 
 fn default_ior() -> f64 {
@@ -243,6 +254,7 @@ impl Material {
             glossy_reflectance: 0.0,
             glossy_transmittance: 0.0,
             roughness: 1.0,
+            glazing: None,
         }
     }
 
@@ -265,8 +277,16 @@ impl Material {
             glossy_reflectance: m.glossy_reflectance,
             glossy_transmittance: m.glossy_transmittance,
             roughness: m.roughness.unwrap_or(1.0),
+            glazing: glazing(&m, &at)?,
         };
         material.validate(&at)?;
+        if material.glazing.is_some() && material.albedo() > 0.0 {
+            return Err(Error::input(
+                &at,
+                "glazing is the whole surface: no reflectance, transmittance, specular or \
+                 glossy part beside it",
+            ));
+        }
         Ok(material)
     }
 
@@ -282,10 +302,21 @@ impl Material {
         ]
     }
 
-    /// Total albedo: the fraction of incident flux that is not absorbed.
+    /// Total albedo: the fraction of incident flux that is not absorbed (glazing aside:
+    /// [`Material::max_albedo`]).
     pub fn albedo(&self) -> f64 {
         // Summed left to right (the bounce cap depends on the bits).
         self.parts().iter().fold(0.0, |sum, (_, x)| sum + x)
+    }
+
+    /// The most of the incident flux it keeps at any angle: 1 for glazing (R + T
+    /// reaches 1 at grazing incidence), else its albedo.
+    pub fn max_albedo(&self) -> f64 {
+        if self.glazing.is_some() {
+            1.0
+        } else {
+            self.albedo()
+        }
     }
 
     /// Every fraction finite and ≥ 0, `ior` ≥ 1, roughness in (0, 1], and no energy
@@ -334,6 +365,15 @@ impl Material {
             self.specular_transmittance,
             self.ior
         );
+        if let Some(g) = &self.glazing {
+            let (r, t) = g.reflect_transmit(1.0);
+            s += &format!(
+                "\n    glazing: {} pane(s) of index {} (transmissivities {:?}): Tn {t:.4}, Rn {r:.4}",
+                g.transmissivities.len(),
+                g.ior,
+                g.transmissivities
+            );
+        }
         if self.glossy_reflectance + self.glossy_transmittance > 0.0 {
             s += &format!(
                 "\n    glossy reflector {} rough glass {} (roughness {}, α {})",
@@ -345,6 +385,61 @@ impl Material {
         }
         s
     }
+}
+
+/// The glazing of a `[materials]` entry: panes by normal transmittance or by
+/// transmissivity (not both), each in (0, the clear pane's], index ≥ 1.
+fn glazing(m: &MaterialFile, at: &str) -> Result<Option<Glazing>> {
+    let ior = m.glazing_ior.unwrap_or(DEFAULT_GLAZING_IOR);
+    if !(ior.is_finite() && ior >= 1.0) {
+        return Err(Error::input(
+            format!("{at}.glazing_ior"),
+            format!("must be ≥ 1, got {ior}"),
+        ));
+    }
+    let (key, panes, by_tn) = match (&m.glazing, &m.glazing_transmissivity) {
+        (None, None) => return Ok(None),
+        (Some(p), None) => ("glazing", p, true),
+        (None, Some(p)) => ("glazing_transmissivity", p, false),
+        (Some(_), Some(_)) => {
+            return Err(Error::input(
+                at,
+                "give the panes by `glazing` (normal transmittances) or by \
+                 `glazing_transmissivity`, not both",
+            ))
+        }
+    };
+    if panes.is_empty() {
+        return Err(Error::input(
+            format!("{at}.{key}"),
+            "needs at least one pane",
+        ));
+    }
+    let clear = Glazing::clear_pane_transmittance(ior);
+    let mut transmissivities = Vec::new();
+    for (i, &x) in panes.iter().enumerate() {
+        let t = if by_tn {
+            Glazing::transmissivity(x, ior).filter(|_| x.is_finite())
+        } else {
+            (x > 0.0 && x <= 1.0).then_some(x)
+        };
+        let Some(t) = t else {
+            let what = if by_tn {
+                format!("a normal transmittance in (0, {clear:.4}] (a clear pane of index {ior})")
+            } else {
+                "a transmissivity in (0, 1]".to_string()
+            };
+            return Err(Error::input(
+                format!("{at}.{key}[{i}]"),
+                format!("must be {what}, got {x}"),
+            ));
+        };
+        transmissivities.push(t);
+    }
+    Ok(Some(Glazing {
+        transmissivities,
+        ior,
+    }))
 }
 
 /// A material's BSDF: its lobes, each with the upper end of its albedo interval on the
@@ -371,6 +466,7 @@ impl Bsdf {
         Mirror::add(&mut b, m.specular_reflectance);
         Glass::add(&mut b, m.specular_transmittance, m.ior);
         Glossy::add(&mut b, m);
+        Glazing::add(&mut b, &m.glazing);
         b
     }
 

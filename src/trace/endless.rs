@@ -15,14 +15,20 @@ use std::collections::HashMap;
 /// above 1 − 2⁻³², [`super::survival_threshold`]) and it has no glossy lobe (GGX lobes
 /// lose energy). Lambertian reflection and transmission, ideal mirrors and clear glass.
 pub fn keeps_every_photon(m: &Material) -> bool {
-    m.glossy_reflectance == 0.0
-        && m.glossy_transmittance == 0.0
-        && super::survival_threshold(m.albedo()) == 1 << 32
+    let kept = match &m.glazing {
+        // Panes that absorb nothing reflect or pass every photon.
+        Some(g) => g.transmissivities.iter().all(|&t| t == 1.0),
+        None => super::survival_threshold(m.albedo()) == 1 << 32,
+    };
+    m.glossy_reflectance == 0.0 && m.glossy_transmittance == 0.0 && kept
 }
 
 /// [`keeps_every_photon`] and lets none through: no photon crosses a surface of it.
 pub fn traps(m: &Material) -> bool {
-    keeps_every_photon(m) && m.transmittance == 0.0 && m.specular_transmittance == 0.0
+    keeps_every_photon(m)
+        && m.transmittance == 0.0
+        && m.specular_transmittance == 0.0
+        && m.glazing.is_none()
 }
 
 /// Per triangle, whether it belongs to a closed surface: its connected component (the

@@ -109,7 +109,7 @@ impl<'a> Tracer<'a> {
         let max_albedo = scene
             .materials
             .iter()
-            .map(|m| m.albedo())
+            .map(|m| m.max_albedo())
             .fold(0.0, f64::max);
         // The roulette keeps a photon when a 32-bit draw x < ⌈ρ·2³²⌉: its survival
         // chance, ⌈ρ·2³²⌉·2⁻³² ≥ ρ, is what the cap's bound is taken over (1 for every

@@ -428,3 +428,79 @@ fn bad_daylight_factor_receivers_are_rejected_in_one_line() {
         assert!(!e.contains('\n'), "{e}");
     }
 }
+
+/// A directional light through a large glazed pane onto a receiver below: E = E⊥·cos θ·
+/// T(θ), T the glazing's transmittance at θ (`Glazing::reflect_transmit`, itself checked
+/// against Stokes' closed form). Shadow rays stop at glazing, so the receiver's sampled
+/// direct part is 0 and the photons crossing it carry all of it; z-scores over
+/// incidences 0–70°, one pane, two, and a tinted second pane.
+#[test]
+fn light_through_glazing_is_its_transmittance() {
+    use luxtally::surface::Glazing;
+    let mut z = Vec::new();
+    for (panes, deg) in [
+        ("[0.88]", 0.0),
+        ("[0.88]", 45.0),
+        ("[0.88]", 70.0),
+        ("[0.88, 0.88]", 60.0),
+        ("[0.88, 0.5]", 30.0),
+    ] {
+        let t = libm::tan(f64::to_radians(deg));
+        let text = format!(
+            "[materials.pane]\nglazing = {panes}\n[[objects]]\nshape = \"rect\"\ncorner = [-7, -7, 1]\n\
+             u = [14, 0, 0]\nv = [0, 14, 0]\nmaterial = \"pane\"\n[[lights]]\ntype = \"directional\"\n\
+             direction = [{t}, 0, -1]\nilluminance_lx = 1000\n[[receivers]]\nname = \"r\"\n\
+             corner = [-1, -1, 0]\nu = [2, 0, 0]\nv = [0, 2, 0]\ncells = [1, 1]\n"
+        );
+        let scene = scene(&text);
+        let m = &scene.materials[0];
+        let g: &Glazing = m.glazing.as_ref().expect("glazing");
+        let cos = libm::cos(f64::to_radians(deg));
+        let exact = 1000.0 * cos * g.reflect_transmit(cos).1;
+        let s = run_with(&scene, 400_000, Estimator::NextEvent, 2);
+        let r = &s.receivers["r"];
+        assert_eq!(r.direct[0], 0.0, "shadow rays stop at glazing");
+        z.push((r.values[0] - exact) / r.sigma[0]);
+    }
+    eprintln!("glazing z: {z:?}");
+    assert!(z.iter().all(|z| z.abs() < 4.0), "{z:?}");
+}
+
+#[test]
+fn bad_glazing_is_rejected_in_one_line() {
+    let with = |keys: &str| {
+        format!(
+            "[materials.pane]\n{keys}\n[[objects]]\nshape = \"rect\"\ncorner = [0, 0, 1]\nu = [1, 0, 0]\n\
+             v = [0, 1, 0]\nmaterial = \"pane\"\n[[lights]]\ntype = \"point\"\nposition = [0, 0, 2]\n\
+             intensity_cd = 1\n"
+        )
+    };
+    let cases = [
+        ("glazing = [1.0]", "materials.pane.glazing[0]"),
+        ("glazing = [0.88, 0.95]", "materials.pane.glazing[1]"),
+        ("glazing = [0]", "materials.pane.glazing[0]"),
+        ("glazing = [-0.2]", "materials.pane.glazing[0]"),
+        ("glazing = []", "at least one pane"),
+        (
+            "glazing_transmissivity = [1.2]",
+            "materials.pane.glazing_transmissivity[0]",
+        ),
+        (
+            "glazing = [0.8]\nglazing_transmissivity = [0.9]",
+            "not both",
+        ),
+        ("glazing = [0.8]\nreflectance = 0.1", "whole surface"),
+        ("glazing = [0.8]\nglazing_ior = 0.5", "glazing_ior"),
+    ];
+    for (keys, needle) in cases {
+        let text = with(keys);
+        let e = match luxtally::scene::load_str(&text, std::path::Path::new("."), "glass.toml") {
+            Ok(_) => panic!("loaded: {keys}"),
+            Err(e) => e.to_string(),
+        };
+        assert!(
+            e.contains(needle) && !e.contains('\n'),
+            "`{needle}` not in: {e}"
+        );
+    }
+}
