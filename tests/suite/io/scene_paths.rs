@@ -84,7 +84,7 @@ fn keys_of_another_kind_do_not_apply_and_unknown_keys_are_named() {
         ),
         (
             "[[lights]]\nposition = [0, 0, 0]\n",
-            "test.toml: lights[0].type: missing (expected \"point\", \"spot\", \"directional\", \"area\" or \"luminaire\")",
+            "test.toml: lights[0].type: missing (expected \"point\", \"spot\", \"directional\", \"area\", \"luminaire\", \"sky\" or \"sun\")",
         ),
     ];
     for (body, expected) in cases {
