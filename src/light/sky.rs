@@ -61,6 +61,12 @@ impl SkyModel {
 
     /// L/Lz towards unit `w` (0 below the horizon).
     pub fn relative(&self, w: DVec3) -> f64 {
+        self.unscaled(w) / self.zenith_value()
+    }
+
+    /// The distribution before its division by its zenith value: f(χ)·φ(Z) for a CIE
+    /// sky (0 below the horizon).
+    fn unscaled(&self, w: DVec3) -> f64 {
         if !(w.z > 0.0) {
             return 0.0;
         }
@@ -68,12 +74,23 @@ impl SkyModel {
             SkyModel::Cie { kind, sun } => {
                 let [a, b, c, d, e] = CIE_SKIES[kind as usize - 1];
                 let chi = libm::acos(w.dot(sun).clamp(-1.0, 1.0));
-                let zs = libm::acos(sun.z.clamp(-1.0, 1.0));
                 Self::indicatrix(c, d, e, chi) * Self::gradation(a, b, w.z)
-                    / (Self::indicatrix(c, d, e, zs) * Self::gradation(a, b, 1.0))
             }
             SkyModel::TraditionalOvercast => (1.0 + 2.0 * w.z) / 3.0,
             SkyModel::Uniform => 1.0,
+        }
+    }
+
+    /// [`SkyModel::unscaled`] at the zenith: f(Zs)·φ(0) for a CIE sky (the zenith sits
+    /// at χ = Zs), 1 for the others.
+    fn zenith_value(&self) -> f64 {
+        match *self {
+            SkyModel::Cie { kind, sun } => {
+                let [a, b, c, d, e] = CIE_SKIES[kind as usize - 1];
+                let zs = libm::acos(sun.z.clamp(-1.0, 1.0));
+                Self::indicatrix(c, d, e, zs) * Self::gradation(a, b, 1.0)
+            }
+            _ => 1.0,
         }
     }
 
@@ -93,8 +110,7 @@ impl SkyModel {
                 let (cos_lo, cos_hi) = (libm::cos(lo), libm::cos(hi));
                 let cos2 = (cos_lo * cos_lo).max(cos_hi * cos_hi);
                 let f = 1.0 + c * (libm::exp(d * lo) - libm::exp(d * FRAC_PI_2)) + e * cos2;
-                let zs = libm::acos(sun.z.clamp(-1.0, 1.0));
-                f * g / (Self::indicatrix(c, d, e, zs) * Self::gradation(a, b, 1.0))
+                f * g / self.zenith_value()
             }
             SkyModel::TraditionalOvercast => (1.0 + 2.0 * z[1]) / 3.0,
             SkyModel::Uniform => 1.0,
@@ -276,10 +292,21 @@ impl Sky {
 
     /// Luminance towards unit `w`: the sky above the horizon, the ground below.
     pub fn luminance(&self, w: DVec3) -> f64 {
-        if w.z > 0.0 {
-            self.zenith_luminance_cdm2 * self.model.relative(w)
-        } else {
-            self.ground_luminance_cdm2()
+        self.luminance_fn()(w)
+    }
+
+    /// [`Sky::luminance`] with its constants (Lz over the zenith value, the ground's
+    /// luminance) worked out once: what photons and next events call.
+    fn luminance_fn(&self) -> impl Fn(DVec3) -> f64 + Send + Sync + 'static {
+        let model = self.model;
+        let scale = self.zenith_luminance_cdm2 / model.zenith_value();
+        let ground = self.ground_luminance_cdm2();
+        move |w: DVec3| {
+            if w.z > 0.0 {
+                scale * model.unscaled(w)
+            } else {
+                ground
+            }
         }
     }
 
@@ -289,8 +316,7 @@ impl Sky {
             .map(|band| (band, lz * self.model.bound(&band)))
             .collect();
         parts.push((Region::ground(), self.ground_luminance_cdm2()));
-        let sky = self.clone();
-        DistantTable::new(parts, Arc::new(move |w| sky.luminance(w)))
+        DistantTable::new(parts, Arc::new(self.luminance_fn()))
     }
 }
 

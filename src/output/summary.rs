@@ -374,12 +374,13 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
     let receivers = &state.scene.receivers;
     let figures = figures::receiver_figures(state.scene, t, index);
     let (quantity, unit) = (r.quantity.name(), r.quantity.unit());
+    let sampled = estimator.direct_by_replicates().then_some(&direct[..]);
     let daylight = daylight_factor(
         state.scene,
         index,
         &stats.values,
         &stats.sigma,
-        &direct,
+        sampled,
         &figures,
     );
     ReceiverSummary {
@@ -416,14 +417,14 @@ fn receiver(state: &RunState<'_>, index: usize, estimator: Estimator) -> Receive
     }
 }
 
-/// Receiver `index`'s daylight factors, if it asks for them: its values, σ, direct part
-/// and figures (Ē, Emin) times 100/E_out.
+/// Receiver `index`'s daylight factors, if it asks for them: its values, σ, sampled
+/// direct part (None for the track estimator) and figures (Ē, Emin) times 100/E_out.
 fn daylight_factor(
     scene: &crate::scene::Scene,
     index: usize,
     values: &[f64],
     sigma: &[f64],
-    direct: &[(f64, f64)],
+    direct: Option<&[(f64, f64)]>,
     figures: &Figures,
 ) -> Option<DaylightFactorSummary> {
     let df = scene.daylight_factor.as_ref()?;
@@ -432,7 +433,6 @@ fn daylight_factor(
     }
     let k = 100.0 / df.outside_lx;
     let scaled = |xs: &[f64]| xs.iter().map(|x| x * k).collect::<Vec<f64>>();
-    let sampled = direct.iter().any(|d| d.0 != 0.0 || d.1 != 0.0);
     let figure = |f: &Figure| Figure {
         value: f.value * k,
         low: f.low * k,
@@ -443,20 +443,10 @@ fn daylight_factor(
         sky: df.sky.clone(),
         values: scaled(values),
         sigma: scaled(sigma),
-        sky_component: if sampled {
-            direct.iter().map(|d| d.0 * k).collect()
-        } else {
-            Vec::new()
-        },
-        reflected: if sampled {
-            values
-                .iter()
-                .zip(direct)
-                .map(|(v, d)| (v - d.0) * k)
-                .collect()
-        } else {
-            Vec::new()
-        },
+        sky_component: direct.map_or_else(Vec::new, |d| d.iter().map(|d| d.0 * k).collect()),
+        reflected: direct.map_or_else(Vec::new, |d| {
+            values.iter().zip(d).map(|(v, d)| (v - d.0) * k).collect()
+        }),
         mean: figure(&figures.mean),
         min: figure(&figures.min),
     })

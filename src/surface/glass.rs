@@ -53,12 +53,7 @@ impl Lobe for Glass {
         let (dir, facing) = (at.dir, at.facing);
         let eta = if at.back { self.ior } else { 1.0 / self.ior };
         let w = w * self.t;
-        let go = |dir, weight, transmitted| Continuation {
-            dir,
-            weight,
-            transmitted,
-            lights_counted: false,
-        };
+        let go = Continuation::specular;
         match refract(dir, facing, eta) {
             Some((refracted, fresnel)) => {
                 out(go(reflect(dir, facing), w * fresnel, false));

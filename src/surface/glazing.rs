@@ -116,12 +116,7 @@ impl Lobe for Glazing {
         out: &mut dyn FnMut(Continuation),
     ) {
         let (r, t) = self.reflect_transmit(-at.dir.dot(at.facing));
-        let go = |dir, weight, transmitted| Continuation {
-            dir,
-            weight,
-            transmitted,
-            lights_counted: false,
-        };
+        let go = Continuation::specular;
         out(go(reflect(at.dir, at.facing), w * r, false));
         out(go(at.dir, w * t, true));
     }

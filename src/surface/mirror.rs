@@ -34,11 +34,10 @@ impl Lobe for Mirror {
         _: &dyn Fn() -> Pcg32,
         out: &mut dyn FnMut(Continuation),
     ) {
-        out(Continuation {
-            dir: reflect(at.dir, at.facing),
-            weight: w * self.r,
-            transmitted: false,
-            lights_counted: false,
-        });
+        out(Continuation::specular(
+            reflect(at.dir, at.facing),
+            w * self.r,
+            false,
+        ));
     }
 }

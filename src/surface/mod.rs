@@ -124,6 +124,19 @@ pub struct Continuation {
     pub lights_counted: bool,
 }
 
+impl Continuation {
+    /// A ray continuing from a Dirac lobe (mirror, glass, glazing): the sources it meets
+    /// are counted along it.
+    pub fn specular(dir: DVec3, weight: f64, transmitted: bool) -> Continuation {
+        Continuation {
+            dir,
+            weight,
+            transmitted,
+            lights_counted: false,
+        }
+    }
+}
+
 /// One lobe of a BSDF: its physics for the photon pass, next-event connections and the
 /// eye pass. A new kind of surface implements this and adds one line to [`Bsdf::new`].
 pub trait Lobe: Debug + Send + Sync {
