@@ -10,7 +10,7 @@
 //! rejection and carry L(ω)/p(ω) exactly.
 
 use super::{Emitter, Incoming};
-use crate::sampling::{basis, uniform, uniform_disk};
+use crate::sampling::{basis, uniform, uniform_disk, SphericalRect};
 use glam::DVec3;
 use rand_pcg::Pcg32;
 use std::f64::consts::PI;
@@ -52,6 +52,17 @@ impl Region {
         }
     }
 
+    /// Whether unit `w` lies in it.
+    pub fn contains(&self, w: DVec3) -> bool {
+        match *self {
+            Region::Band { z, phi } => {
+                let p = libm::atan2(w.y, w.x).rem_euclid(2.0 * PI);
+                w.z >= z[0] && w.z < z[1] && p >= phi[0] && p < phi[1]
+            }
+            Region::Cone { axis, cos_max } => w.dot(axis) >= cos_max,
+        }
+    }
+
     /// The lower hemisphere (the ground seen from above it).
     pub fn ground() -> Region {
         Region::Band {
@@ -73,6 +84,9 @@ pub struct DistantTable {
     cdf: Vec<f64>,
     total: f64,
     luminance: LuminanceFn,
+    /// The first nz × nphi regions are [`hemisphere_bands`] (nz, nphi), in order: the
+    /// density finds a direction's band directly.
+    grid: Option<(usize, usize)>,
 }
 
 impl std::fmt::Debug for DistantTable {
@@ -101,7 +115,36 @@ impl DistantTable {
             cdf,
             total,
             luminance,
+            grid: None,
         }
+    }
+
+    /// Marks the first regions as the (nz, nphi) hemisphere bands, if all were kept.
+    pub fn with_grid(mut self, nz: usize, nphi: usize) -> DistantTable {
+        let kept = (self.regions.iter().take(nz * nphi))
+            .zip(hemisphere_bands(nz, nphi))
+            .filter(|(a, b)| a == &b)
+            .count();
+        if kept == nz * nphi {
+            self.grid = Some((nz, nphi));
+        }
+        self
+    }
+
+    /// The density (1/sr) with which [`DistantTable::piece`] draws unit `w`.
+    pub fn density(&self, w: DVec3) -> f64 {
+        if self.is_dark() {
+            return 0.0;
+        }
+        if let (Some((nz, nphi)), true) = (self.grid, w.z > 0.0) {
+            let i = ((w.z * nz as f64) as usize).min(nz - 1);
+            let phi = libm::atan2(w.y, w.x).rem_euclid(2.0 * PI);
+            let j = ((phi / (2.0 * PI) * nphi as f64) as usize).min(nphi - 1);
+            return self.bounds[i * nphi + j] / self.total;
+        }
+        (self.regions.iter().zip(&self.bounds))
+            .find(|(r, _)| r.contains(w))
+            .map_or(0.0, |(_, b)| b / self.total)
     }
 
     pub fn is_dark(&self) -> bool {
@@ -145,6 +188,46 @@ impl DistantTable {
     }
 }
 
+/// An opening the scene's daylight enters by (`[[portals]]`): a rectangle with
+/// orthogonal edges `u`, `v` from `corner`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Portal {
+    pub corner: DVec3,
+    pub u: DVec3,
+    pub v: DVec3,
+}
+
+impl Portal {
+    /// The portal moved by `offset` (world to local: −origin).
+    pub fn shifted(&self, offset: DVec3) -> Portal {
+        Portal {
+            corner: self.corner + offset,
+            ..*self
+        }
+    }
+
+    /// Whether the ray from `p` along unit `w` passes through it.
+    fn passes(&self, p: DVec3, w: DVec3) -> bool {
+        let n = self.u.cross(self.v);
+        let along = w.dot(n);
+        if along == 0.0 {
+            return false;
+        }
+        let t = (self.corner - p).dot(n) / along;
+        let q = p + w * t - self.corner;
+        let (s, r) = (
+            q.dot(self.u) / self.u.length_squared(),
+            q.dot(self.v) / self.v.length_squared(),
+        );
+        t > 0.0 && (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&r)
+    }
+}
+
+/// With portals, the share of next-event pieces drawn from the whole sky's table (the
+/// rest aim at the portals): they estimate the light that does not come through a
+/// portal (sky seen beside them).
+pub const SKY_TABLE_SHARE: f64 = 0.25;
+
 /// A distant source prepared for the passes: photons start on a disk of the scene's
 /// radius outside the scene, normal to their direction.
 #[derive(Clone, Debug)]
@@ -153,6 +236,63 @@ pub struct DistantEmitter {
     /// Centre (local frame) and radius of the scene's bounding sphere.
     pub center: DVec3,
     pub radius: f64,
+    /// Openings (local frame) next events also aim at.
+    pub portals: Vec<Portal>,
+}
+
+impl DistantEmitter {
+    /// Next-event pieces with portals. The sphere of directions seen from `p` is split
+    /// in two: those through some portal, sampled by the portals' solid angles (share
+    /// 1 − [`SKY_TABLE_SHARE`], split evenly, combined by their summed density where
+    /// portals overlap), and all others, sampled by the sky's table (a table piece
+    /// through a portal counts 0: that part is the portals'). Each part's estimate is
+    /// unbiased, so their sum is, wherever the sky is seen. A partition rather than a
+    /// mixture: a table piece through an opening would carry the same weight as the
+    /// portals' but come rarely, and such rare scores make a cell's σ untrustworthy.
+    fn incoming_through_portals(
+        &self,
+        p: DVec3,
+        area_pattern: &[(f64, f64)],
+        each: &mut dyn FnMut(Incoming),
+    ) {
+        let rects: Vec<Option<SphericalRect>> = (self.portals.iter())
+            .map(|o| SphericalRect::new(p, o.corner, o.u, o.v))
+            .collect();
+        let q = SKY_TABLE_SHARE;
+        let per_portal = (1.0 - q) / self.portals.len() as f64;
+        let pieces = area_pattern.len().max(1) as f64;
+        for &(a, b) in area_pattern {
+            let (w, density) = if a < q {
+                let w = self.table.piece(a / q, b).0;
+                if self.portals.iter().any(|o| o.passes(p, w)) {
+                    continue;
+                }
+                (w, q * self.table.density(w))
+            } else {
+                let x = (a - q) / (1.0 - q) * self.portals.len() as f64;
+                let k = (x as usize).min(self.portals.len() - 1);
+                let Some(rect) = &rects[k] else { continue };
+                let point = rect.sample((x - k as f64).clamp(0.0, 1.0 - f64::EPSILON), b);
+                let w = (point - p).normalize();
+                // Aimed at portal k, w passes it even where rounding puts the point a
+                // hair outside an edge.
+                let density: f64 = (self.portals.iter().zip(&rects).enumerate())
+                    .filter(|(j, (o, _))| *j == k || o.passes(p, w))
+                    .filter_map(|(_, (_, r))| r.as_ref())
+                    .map(|r| per_portal / r.solid_angle_sr)
+                    .sum();
+                (w, density)
+            };
+            let l = self.table.luminance(w);
+            if l > 0.0 && density > 0.0 {
+                each(Incoming {
+                    to_source: w,
+                    distance: f64::INFINITY,
+                    normal_lx: l / density / pieces,
+                });
+            }
+        }
+    }
 }
 
 impl Emitter for DistantEmitter {
@@ -162,9 +302,12 @@ impl Emitter for DistantEmitter {
         (uniform_disk(rng, disk, -w, self.radius), -w)
     }
 
-    fn incoming(&self, _: DVec3, area_pattern: &[(f64, f64)], each: &mut dyn FnMut(Incoming)) {
+    fn incoming(&self, p: DVec3, area_pattern: &[(f64, f64)], each: &mut dyn FnMut(Incoming)) {
         if self.table.is_dark() {
             return;
+        }
+        if !self.portals.is_empty() {
+            return self.incoming_through_portals(p, area_pattern, each);
         }
         let pieces = area_pattern.len().max(1) as f64;
         for &(a, b) in area_pattern {

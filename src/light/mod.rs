@@ -179,6 +179,8 @@ pub struct LoadContext<'a> {
     photometry: Vec<(PathBuf, Arc<Photometry>)>,
     /// The scene's `maintenance_factor`: luminaires without their own take it.
     pub maintenance_factor: f64,
+    /// The scene's `[[portals]]` (world): skies aim their next events at them.
+    pub portals: Vec<distant::Portal>,
 }
 
 impl<'a> LoadContext<'a> {
@@ -187,6 +189,7 @@ impl<'a> LoadContext<'a> {
             base_dir,
             photometry: Vec::new(),
             maintenance_factor: 1.0,
+            portals: Vec::new(),
         }
     }
 

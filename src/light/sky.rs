@@ -4,7 +4,7 @@
 //! ground below the horizon as a Lambertian emitter of ρ·E_h/π (docs/daylight.md). The
 //! sky excludes the sun's disc: that is `type = "sun"`.
 
-use super::distant::{angle_range, hemisphere_bands, DistantEmitter, DistantTable, Region};
+use super::distant::{angle_range, hemisphere_bands, DistantEmitter, DistantTable, Portal, Region};
 use super::sun::{ground_reflectance, SunPositionFile};
 use super::{single, BoundingSphere, Emitter, Labelled, Light, LightFile, LoadContext};
 use crate::error::{Error, Result};
@@ -243,7 +243,7 @@ impl SkyFile {
 impl LightFile for SkyFile {
     const TYPE: &'static str = "sky";
 
-    fn into_lights(self, label: &str, at: &str, _: &mut LoadContext) -> Result<Vec<Labelled>> {
+    fn into_lights(self, label: &str, at: &str, cx: &mut LoadContext) -> Result<Vec<Labelled>> {
         let model = self.model(at)?;
         let (solid_per_lz, per_lz) = model.integrals();
         let zenith_luminance_cdm2 = match (self.zenith_luminance_cdm2, self.horizontal_illuminance_lx) {
@@ -264,6 +264,7 @@ impl LightFile for SkyFile {
                 horizontal_lx: zenith_luminance_cdm2 * per_lz,
                 radiant_integral: zenith_luminance_cdm2 * solid_per_lz,
                 ground_reflectance: ground_reflectance(self.ground_reflectance, at)?,
+                portals: cx.portals.clone(),
             },
         )
     }
@@ -279,6 +280,8 @@ pub struct Sky {
     /// ∫ L dω over the upper hemisphere, cd/m²·sr.
     pub radiant_integral: f64,
     pub ground_reflectance: f64,
+    /// The scene's `[[portals]]`: next events aim at them too.
+    pub portals: Vec<Portal>,
 }
 
 /// Bands the sky is tabulated on for sampling: z × azimuth.
@@ -316,7 +319,7 @@ impl Sky {
             .map(|band| (band, lz * self.model.bound(&band)))
             .collect();
         parts.push((Region::ground(), self.ground_luminance_cdm2()));
-        DistantTable::new(parts, Arc::new(self.luminance_fn()))
+        DistantTable::new(parts, Arc::new(self.luminance_fn())).with_grid(BANDS.0, BANDS.1)
     }
 }
 
@@ -349,6 +352,7 @@ impl Light for Sky {
             table: self.table(),
             center: sphere.center - origin,
             radius: sphere.radius,
+            portals: self.portals.iter().map(|o| o.shifted(-origin)).collect(),
         })
     }
 
@@ -416,6 +420,7 @@ mod tests {
             horizontal_lx: horizontal,
             radiant_integral: solid,
             ground_reflectance: 0.2,
+            portals: Vec::new(),
         };
         let table = sky.table();
         let n = 400;

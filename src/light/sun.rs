@@ -291,10 +291,12 @@ impl Light for Sun {
     }
 
     fn emitter(&self, origin: DVec3, sphere: &BoundingSphere) -> Arc<dyn Emitter> {
+        // The sun's cone is sampled directly: portals would not help it.
         Arc::new(DistantEmitter {
             table: self.table(),
             center: sphere.center - origin,
             radius: sphere.radius,
+            portals: Vec::new(),
         })
     }
 

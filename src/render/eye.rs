@@ -13,6 +13,7 @@ use crate::scene::{Camera, Scene};
 use crate::surface::{Bsdf, Incidence, LobeKind, Transport};
 use crate::trace::emit::Emitters;
 use crate::trace::scatter::offset_origin;
+use crate::trace::shadow::{ShadowCaster, ShadowScratch};
 use glam::{DVec3, Vec3};
 use rand_pcg::Pcg32;
 
@@ -88,6 +89,8 @@ pub fn area_samples_per_side(n0: u32, diagonal_m: f64, distance_m: f64) -> usize
 /// Everything the eye pass reads, prepared once.
 pub struct EyePass<'a> {
     caster: &'a dyn RayCaster,
+    /// The direct term's shadow rays (through glazing).
+    shadows: ShadowCaster<'a>,
     scene: &'a Scene,
     camera: &'a Camera,
     field: &'a IndirectField,
@@ -134,7 +137,9 @@ pub struct Scratch {
     shadow: RayBatch,
     /// Per shadow ray: (sample within tile, luminance it adds if unoccluded).
     shadow_gain: Vec<(u32, f64)>,
-    occluded: Vec<bool>,
+    /// Per shadow ray, the fraction of its light that arrives.
+    through: Vec<f64>,
+    shadow_scratch: ShadowScratch,
 }
 
 impl<'a> EyePass<'a> {
@@ -150,6 +155,7 @@ impl<'a> EyePass<'a> {
         let scene_scale = scene.geometry.local_scale();
         EyePass {
             caster,
+            shadows: ShadowCaster::new(scene, caster),
             scene,
             camera,
             field,
@@ -195,11 +201,11 @@ impl<'a> EyePass<'a> {
                 self.shade(k, depth < self.camera.max_depth, stream, s, &mut sample_l);
             }
             if !s.shadow.is_empty() {
-                self.caster.occluded(&s.shadow, &mut s.occluded);
+                (self.shadows).transmitted(&s.shadow, &mut s.through, &mut s.shadow_scratch);
                 counts.shadow += s.shadow.len() as u64;
-                for (&(sample, gain), &blocked) in s.shadow_gain.iter().zip(&s.occluded) {
-                    if !blocked {
-                        sample_l[sample as usize] += gain;
+                for (&(sample, gain), &through) in s.shadow_gain.iter().zip(&s.through) {
+                    if through > 0.0 {
+                        sample_l[sample as usize] += gain * through;
                     }
                 }
             }
@@ -338,7 +344,8 @@ impl<'a> EyePass<'a> {
                 s.next_paths.push(Path {
                     sample: at.path.sample,
                     weight: c.weight,
-                    lights_counted: c.lights_counted,
+                    // Straight through a pane, the shadow rays behind it went on too.
+                    lights_counted: c.lights_counted || (c.see_through && at.path.lights_counted),
                 });
             });
     }

@@ -35,6 +35,18 @@ pub struct SceneFile {
     pub camera: Option<CameraFile>,
     #[serde(default)]
     pub observers: Vec<super::observers::ObserverFile>,
+    /// Openings daylight enters by: skies aim their next events at them.
+    #[serde(default)]
+    pub portals: Vec<PortalFile>,
+}
+
+/// A `[[portals]]` entry: a rectangle (`u`, `v` orthogonal) from `corner`.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct PortalFile {
+    pub corner: crate::input::Coords,
+    pub u: crate::input::Coords,
+    pub v: crate::input::Coords,
 }
 
 /// `scale = 2` or `scale = [1, 2, 1]`.

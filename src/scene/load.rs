@@ -55,7 +55,8 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         Some(m) => m.factor(&at("maintenance_factor"))?,
         None => 1.0,
     };
-    let lights = lights(raw.lights, origin, base_dir, maintenance_factor)?;
+    let portals = portals(&raw.portals, origin)?;
+    let lights = lights(raw.lights, origin, base_dir, maintenance_factor, portals)?;
     let modelling_with: Vec<Option<String>> = (raw.receivers.iter())
         .map(|r| r.modelling_with.clone())
         .collect();
@@ -157,10 +158,12 @@ fn lights(
     origin: &str,
     base_dir: &Path,
     maintenance_factor: f64,
+    portals: Vec<light::distant::Portal>,
 ) -> Result<Vec<SceneLight>> {
     let mut lights = Vec::new();
     let mut cx = LoadContext::new(base_dir);
     cx.maintenance_factor = maintenance_factor;
+    cx.portals = portals;
     for (i, value) in entries.into_iter().enumerate() {
         let label = format!("lights[{i}]");
         for (label, kind) in light::load_entry(value, &label, origin, &mut cx)? {
@@ -168,6 +171,27 @@ fn lights(
         }
     }
     Ok(lights)
+}
+
+/// The `[[portals]]`, validated: each a rectangle of non-zero area with orthogonal
+/// edges, within reach.
+fn portals(entries: &[file::PortalFile], origin: &str) -> Result<Vec<light::distant::Portal>> {
+    let mut out = Vec::new();
+    for (i, p) in entries.iter().enumerate() {
+        let at = format!("{origin}: portals[{i}]");
+        let (corner, u, v) = (vec3(p.corner), vec3(p.u), vec3(p.v));
+        if !(u.cross(v).length() > 0.0) {
+            return Err(Error::input(at, "zero-area portal: u × v = 0"));
+        }
+        if u.dot(v).abs() > 1e-9 * u.length() * v.length() {
+            return Err(Error::input(
+                at,
+                "a portal is a rectangle: u and v must be orthogonal",
+            ));
+        }
+        out.push(light::distant::Portal { corner, u, v });
+    }
+    Ok(out)
 }
 
 /// The `[[receivers]]` entries, validated; names are unique.

@@ -116,9 +116,12 @@ impl Lobe for Glazing {
         out: &mut dyn FnMut(Continuation),
     ) {
         let (r, t) = self.reflect_transmit(-at.dir.dot(at.facing));
-        let go = Continuation::specular;
-        out(go(reflect(at.dir, at.facing), w * r, false));
-        out(go(at.dir, w * t, true));
+        out(Continuation::specular(
+            reflect(at.dir, at.facing),
+            w * r,
+            false,
+        ));
+        out(Continuation::see_through(at.dir, w * t));
     }
 }
 

@@ -156,6 +156,7 @@ impl Lobe for Glossy {
                     weight: w * self.gr * smp.weight,
                     transmitted: false,
                     lights_counted: true,
+                    see_through: false,
                 });
             }
         }
@@ -167,6 +168,7 @@ impl Lobe for Glossy {
                     weight: w * self.gt * smp.weight,
                     transmitted: smp.transmitted,
                     lights_counted: true,
+                    see_through: false,
                 });
             }
         }

@@ -122,6 +122,9 @@ pub struct Continuation {
     /// The lobe already took the light of sources it sees (by shadow rays through `f`),
     /// so sources met along it are not counted again.
     pub lights_counted: bool,
+    /// It goes on unbent through thin glazing, as shadow rays do: whether the sources
+    /// met along it are counted is the incoming path's.
+    pub see_through: bool,
 }
 
 impl Continuation {
@@ -133,6 +136,15 @@ impl Continuation {
             weight,
             transmitted,
             lights_counted: false,
+            see_through: false,
+        }
+    }
+
+    /// The ray going on straight through thin glazing.
+    pub fn see_through(dir: DVec3, weight: f64) -> Continuation {
+        Continuation {
+            see_through: true,
+            ..Continuation::specular(dir, weight, true)
         }
     }
 }

@@ -3,8 +3,8 @@
 //! the cell's mean direct illuminance (or luminance) — an m × m jittered pattern over the
 //! cell, each point paired with one light (chosen per cell in proportion to its expected
 //! share, stratified) and, for area sources, with a point of an m × m jittered pattern
-//! over the source (strata paired by a random permutation), with shadow rays through the
-//! backend's occlusion path. Replicates are independent, so their Σy, Σy² give the direct
+//! over the source (strata paired by a random permutation), with shadow rays that thin
+//! glazing lets through attenuated ([`super::shadow`]). Replicates are independent, so their Σy, Σy² give the direct
 //! part's mean and σ by eqs. 6–7, like photon histories; σ sees every error of the
 //! pattern (shadow edges, cone edges, grazing angles) and shrinks as replicates are
 //! added during the run ([`DirectSchedule`]).
@@ -14,7 +14,8 @@
 //! on threads or epochs.
 
 use super::emit::Emitters;
-use crate::accel::{RayBatch, RayCaster};
+use super::shadow::{ShadowCaster, ShadowScratch};
+use crate::accel::RayBatch;
 use crate::rng::direct_stream;
 use crate::sampling::uniform;
 use crate::tally::{CellSums, ReceiverGrid};
@@ -193,7 +194,9 @@ struct Scratch {
     rays: RayBatch,
     /// Per shadow ray: (replicate within the call, weight if unoccluded).
     weights: Vec<(u32, f64)>,
-    occluded: Vec<bool>,
+    /// Per shadow ray, the fraction of its light that arrives.
+    through: Vec<f64>,
+    shadow: ShadowScratch,
     permutation: Vec<u32>,
     light_permutation: Vec<u32>,
     /// Per replicate of a block: the sum of its unoccluded weights.
@@ -206,7 +209,7 @@ const REPLICATES_PER_BATCH: u64 = 64;
 /// Everything a replicate reads.
 pub struct DirectLight<'a> {
     pub emitters: &'a Emitters,
-    pub caster: &'a dyn RayCaster,
+    pub shadows: &'a ShadowCaster<'a>,
     /// How far from a surface (m) a receiver still counts as lying on it.
     pub slack: f64,
     pub seed: u64,
@@ -270,7 +273,7 @@ impl DirectLight<'_> {
     }
 
     /// What reaches each corner of the cells of columns `cols` and rows `rows` of the
-    /// grid from each light's centre, through the backend's occlusion path: light by
+    /// grid from each light's centre, by [`ShadowCaster::transmitted`]: light by
     /// light, (cols + 1) × (rows + 1) corners row by row. A straight shadow edge crossing
     /// a cell leaves at least one of its corners on each side, so a lit and a shadowed
     /// corner find every such cell (one shadow ray per corner and light, shared by the
@@ -300,12 +303,13 @@ impl DirectLight<'_> {
                 for c in first..(first + BATCH).min(per_light) {
                     self.queue(grid, light, corner_point(c), (0.5, 0.5), 1.0, c as u32, s);
                 }
-                self.caster.occluded(&s.rays, &mut s.occluded);
-                for (&(c, w), &blocked) in s.weights.iter().zip(&s.occluded) {
-                    let state = match (w > 0.0, blocked) {
+                self.shadows
+                    .transmitted(&s.rays, &mut s.through, &mut s.shadow);
+                for (&(c, w), &through) in s.weights.iter().zip(&s.through) {
+                    let state = match (w > 0.0, through > 0.0) {
                         (false, _) => CornerLight::Unlit,
-                        (true, true) => CornerLight::Shadowed,
-                        (true, false) => CornerLight::Lit,
+                        (true, false) => CornerLight::Shadowed,
+                        (true, true) => CornerLight::Lit,
                     };
                     let corner = &mut states[c as usize];
                     *corner = (*corner).max(state);
@@ -389,12 +393,13 @@ impl DirectLight<'_> {
                     self.queue(grid, light, p, source_point, weight, r as u32, s);
                 }
             }
-            self.caster.occluded(&s.rays, &mut s.occluded);
+            self.shadows
+                .transmitted(&s.rays, &mut s.through, &mut s.shadow);
             s.totals.clear();
             s.totals.resize(block as usize, 0.0);
-            for (&(r, w), &blocked) in s.weights.iter().zip(&s.occluded) {
-                if !blocked {
-                    s.totals[r as usize] += w;
+            for (&(r, w), &through) in s.weights.iter().zip(&s.through) {
+                if through > 0.0 {
+                    s.totals[r as usize] += w * through;
                 }
             }
             for &y in &s.totals {
@@ -429,8 +434,9 @@ impl DirectLight<'_> {
             let Some(factor) = grid.arrival_factor(-inc.direction()) else {
                 return;
             };
-            // Stop just short of the source, and start a directional source's ray
-            // just off the receiver, which may lie on a surface.
+            // Stop just short of the source, and start just off the receiver, which may
+            // lie on a surface. (So a ray from a point within 2·slack of a wall the
+            // receiver's edge touches passes through it: docs/daylight.md, *Openings*.)
             let (t_near, t_far) = if inc.distance.is_finite() {
                 let eps = (2.0 * slack / inc.distance) as f32;
                 (eps, 1.0 - eps)

@@ -8,7 +8,7 @@ use super::scatter::scatter;
 use super::Tracer;
 use crate::accel::{RayBatch, Surface};
 use crate::scene::Geometry;
-use crate::surface::Bsdf;
+use crate::surface::{Bsdf, Material};
 use crate::tally::{deposit_code, ChunkTally};
 use glam::{DVec3, Vec3};
 use rand::RngCore;
@@ -155,7 +155,16 @@ impl<'a> HitsOut<'a> {
         let w = sample.dir.as_vec3();
         let [dx, dy, dz] = &mut self.dir;
         (dx[j], dy[j], dz[j]) = (w.x, w.y, w.z);
-        let segment = Segment::after(sample.kind, hit.surfacing.glossy_connectable);
+        // Emitted light that a pane passes straight on is still direct light: the
+        // receivers' next events take it through the pane.
+        let still_direct = sample.transmitted
+            && hit.surfacing.see_through
+            && self.survivors.segment[hit.k] == Segment::Emitted;
+        let segment = if still_direct {
+            Segment::Emitted
+        } else {
+            Segment::after(sample.kind, hit.surfacing.glossy_connectable)
+        };
         self.survivors
             .write(j, hit.point, side, hit.offset, segment, rng);
         self.cursors.survivors += 1;
@@ -219,11 +228,16 @@ pub(super) struct Surfacing {
     /// A photon survives that roulette when its 32-bit draw x is below this:
     /// x < ⌈ρ·2³²⌉ ⇔ x·2⁻³² < ρ, [`crate::sampling::uniform`]'s comparison, in integers.
     pub(super) survives_below: u64,
+    /// Thin glazing: light it transmits goes on unbent, as next events' shadow rays
+    /// see it ([`super::shadow`]).
+    pub(super) see_through: bool,
 }
 
 impl Surfacing {
-    pub(super) fn new(bsdf: Bsdf) -> Surfacing {
+    pub(super) fn new(m: &Material) -> Surfacing {
+        let bsdf = Bsdf::new(m);
         Surfacing {
+            see_through: m.glazing.is_some(),
             connectable: bsdf.connectable(),
             glossy_connectable: bsdf.glossy_connectable(),
             lambert_only: bsdf.lambert_only(),
@@ -255,9 +269,10 @@ impl Tracer<'_> {
         odd_first: bool,
     ) -> (usize, usize) {
         let (n, hits, rays) = (s.rays.len(), &s.hits, &mut s.rays);
-        // Every live photon has hit as often: the first hit is direct light.
+        // Every live photon has hit as often: the first hit is direct light, and so is
+        // a later one of an emitted segment (passed on straight by glazing).
         let hit_bounces = s.lanes.bounces;
-        let (indirect, capped) = (hit_bounces > 0, hit_bounces >= self.max_bounces);
+        let capped = hit_bounces >= self.max_bounces;
         let first_deposit = tally.deposits.len();
         tally.deposits.resize(first_deposit + n, 0);
         let mut out = HitsOut::new(
@@ -291,6 +306,11 @@ impl Tracer<'_> {
             // Unmapped (instanced) objects scatter and occlude but hold no tallies.
             let (tri, has_map) = (surface.mapped.unwrap_or(0), surface.mapped.is_some());
             let odd = (offset % 2 == 1) != odd_first;
+            let indirect = if LAMBERT_TRACK {
+                hit_bounces > 0
+            } else {
+                out.survivors.segment[k] != Segment::Emitted
+            };
             out.deposit(deposit_code(tri, back_face, indirect, odd), has_map);
             let surfacing = &self.surfacings[surface.material as usize];
             if !LAMBERT_TRACK && self.any_connects && surfacing.connectable {

@@ -11,7 +11,10 @@
 //!   expected contribution there; segments that leave a specular interaction (mirror,
 //!   glass: not connectable) still score by crossing, and so do diffuse segments that
 //!   cross the receiver within its near zone (one cell diagonal from their vertex),
-//!   where connections would have unbounded variance.
+//!   where connections would have unbounded variance. A segment straight from its
+//!   source through glazing (no reflection) stays direct: next events see through
+//!   panes ([`shadow`]), so it is theirs. Connections stop at glazing: a reflected
+//!   photon reaches a receiver beyond a pane by crossing it.
 
 mod batch;
 pub mod bounce_cap;
@@ -21,12 +24,13 @@ pub mod endless;
 mod hits;
 pub mod receiver_reach;
 pub mod scatter;
+pub mod shadow;
 
 use crate::accel::{RayBatch, RayCaster};
 use crate::rng::PhotonStreams;
 use crate::sampling::{cosine_from_square, uniform_f32};
 use crate::scene::{Estimator, Geometry, Scene};
-use crate::surface::{Bsdf, Transport};
+use crate::surface::Transport;
 use crate::tally::{CellPartial, ChunkTally, ReceiverGrid, Tallies};
 pub use batch::Scratch;
 use batch::{Lanes, Segment};
@@ -48,6 +52,8 @@ pub const CHUNK_PHOTONS: u64 = 4096;
 /// Everything a worker needs to trace photons; shared read-only by all workers.
 pub struct Tracer<'a> {
     caster: &'a dyn RayCaster,
+    /// The next-event receivers' shadow rays (through glazing).
+    shadows: shadow::ShadowCaster<'a>,
     geometry: &'a Geometry,
     /// Per mapped triangle, what a hit on it needs ([`TriangleSurface`]); empty for
     /// scenes above [`SURFACE_TABLE_MAX_TRIANGLES`].
@@ -97,9 +103,7 @@ impl<'a> Tracer<'a> {
             })
             .collect();
         let scene_scale = g.local_scale();
-        let surfacings: Vec<Surfacing> = (scene.materials.iter())
-            .map(|m| Surfacing::new(Bsdf::new(m)))
-            .collect();
+        let surfacings: Vec<Surfacing> = (scene.materials.iter()).map(Surfacing::new).collect();
         let any_connects = receivers.iter().any(|r| r.estimator.connects());
         // The slim loop keeps no segment lane: every bounced photon stays `Emitted`, which
         // only receivers whose direct light is not sampled score by crossing.
@@ -118,6 +122,7 @@ impl<'a> Tracer<'a> {
         let cap = bounce_cap(survival);
         Tracer {
             caster,
+            shadows: shadow::ShadowCaster::new(scene, caster),
             geometry: g,
             surface_table: TriangleSurface::table(g),
             surfacings,
@@ -151,7 +156,7 @@ impl<'a> Tracer<'a> {
     pub fn direct_light(&self) -> DirectLight<'_> {
         DirectLight {
             emitters: &self.emitters,
-            caster: self.caster,
+            shadows: &self.shadows,
             slack: self.receiver_slack,
             seed: self.seed,
         }
@@ -312,6 +317,8 @@ impl<'a> Tracer<'a> {
         s.lanes.truncate(j);
         s.lanes.bounces += 1;
         if !s.shadow_rays.is_empty() {
+            // Plain occlusion, glazing included: through a pane the photon's own
+            // transmitted segment scores by crossing (module docs).
             self.caster.occluded(&s.shadow_rays, &mut s.occluded);
             tally.rays += s.shadow_rays.len() as u64;
             for (score, blocked) in s.shadow_scores.iter().zip(&s.occluded) {

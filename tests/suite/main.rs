@@ -30,6 +30,7 @@ mod physics {
     mod figures;
     mod glossy;
     mod luminaires;
+    mod openings;
     mod physics;
     mod points;
     mod render;

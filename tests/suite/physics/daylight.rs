@@ -20,7 +20,7 @@ fn sky_scene(keys: &str, photons: u64) -> String {
     )
 }
 
-fn run_with(
+pub fn run_with(
     scene: &Scene,
     photons: u64,
     estimator: Estimator,
@@ -146,7 +146,7 @@ fn every_sky_gives_its_horizontal_illuminance() {
 
 /// A closed black box 4 × 4 × 3 m with a 1 × 1 m opening in its roof over the floor's
 /// centre, and a receiver on the floor, under `lights`.
-fn roof_opening(lights: &str) -> String {
+pub fn roof_opening(lights: &str) -> String {
     let rect = |corner: [f64; 3], u: [f64; 3], v: [f64; 3]| {
         format!(
             "[[objects]]\nshape = \"rect\"\ncorner = {corner:?}\nu = {u:?}\nv = {v:?}\nmaterial = \"black\"\n"
@@ -329,7 +329,7 @@ fn bad_skies_and_suns_are_rejected_in_one_line() {
 /// E at a floor point `(x, y)` of [`roof_opening`] under the traditional overcast sky of
 /// zenith luminance 1: ∫ over the opening of L(ω)·cos²/r² dA with cos = h/r and
 /// L = (1 + 2h/r)/3, by 8 × 8 Gauss–Legendre on 4 × 4 panels.
-fn overcast_through_opening(x: f64, y: f64, h: f64) -> f64 {
+pub fn overcast_through_opening(x: f64, y: f64, h: f64) -> f64 {
     let f = |a: f64, b: f64| {
         let r2 = (a - x) * (a - x) + (b - y) * (b - y) + h * h;
         let r = r2.sqrt();
@@ -431,9 +431,9 @@ fn bad_daylight_factor_receivers_are_rejected_in_one_line() {
 
 /// A directional light through a large glazed pane onto a receiver below: E = E⊥·cos θ·
 /// T(θ), T the glazing's transmittance at θ (`Glazing::reflect_transmit`, itself checked
-/// against Stokes' closed form). Shadow rays stop at glazing, so the receiver's sampled
-/// direct part is 0 and the photons crossing it carry all of it; z-scores over
-/// incidences 0–70°, one pane, two, and a tinted second pane.
+/// against Stokes' closed form), over incidences 0–70°, one pane, two, and a tinted
+/// second pane. Next events see through the pane: their direct part is E exactly (one
+/// direction, no variance); photons crossing it (the track estimator) give E within σ.
 #[test]
 fn light_through_glazing_is_its_transmittance() {
     use luxtally::surface::Glazing;
@@ -457,9 +457,21 @@ fn light_through_glazing_is_its_transmittance() {
         let g: &Glazing = m.glazing.as_ref().expect("glazing");
         let cos = libm::cos(f64::to_radians(deg));
         let exact = 1000.0 * cos * g.reflect_transmit(cos).1;
-        let s = run_with(&scene, 400_000, Estimator::NextEvent, 2);
+        let s = run_with(&scene, 20_000, Estimator::NextEvent, 2);
         let r = &s.receivers["r"];
-        assert_eq!(r.direct[0], 0.0, "shadow rays stop at glazing");
+        // Exact to the f32 precision of the rays' directions.
+        assert!(
+            (r.direct[0] - exact).abs() < 1e-6 * exact,
+            "{} vs {exact}",
+            r.direct[0]
+        );
+        assert!(
+            (r.values[0] - exact).abs() < 1e-6 * exact,
+            "{} vs {exact}",
+            r.values[0]
+        );
+        let s = run_with(&scene, 400_000, Estimator::Track, 2);
+        let r = &s.receivers["r"];
         z.push((r.values[0] - exact) / r.sigma[0]);
     }
     eprintln!("glazing z: {z:?}");

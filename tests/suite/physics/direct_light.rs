@@ -531,7 +531,7 @@ fn cell_sides(toml: &str) -> (Vec<u32>, u32) {
         .expect("backend builds");
     let direct = DirectLight {
         emitters: &emitters,
-        caster: caster.as_ref(),
+        shadows: &luxtally::trace::shadow::ShadowCaster::new(&scene, caster.as_ref()),
         slack: 1e-6,
         seed: 1,
     };

@@ -178,7 +178,7 @@ fn cell_moments_match_a_high_precision_recomputation_from_the_replicates() {
         .expect("backend builds");
     let direct = luxtally::trace::direct::DirectLight {
         emitters: &emitters,
-        caster: caster.as_ref(),
+        shadows: &luxtally::trace::shadow::ShadowCaster::new(&scene, caster.as_ref()),
         slack: 1e-6,
         seed: 3,
     };

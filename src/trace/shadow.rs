@@ -1,0 +1,111 @@
+//! Shadow rays of next events (receivers' direct light, the eye pass's direct light):
+//! what reaches a point along each. Opaque surfaces block; thin glazing
+//! ([`crate::surface::Glazing`]) lets the light through unbent, times its transmittance
+//! T(θ) at the ray's incidence, so windows pass the sky and the sun to next events. A
+//! scene without glazing keeps the backend's occlusion path.
+
+use super::scatter::offset_origin;
+use crate::accel::{HitBatch, RayBatch, RayCaster};
+use crate::scene::{Geometry, Scene};
+use crate::surface::Glazing;
+use glam::Vec3;
+
+/// Panes a shadow ray crosses at most; a ray still in glass after them counts as
+/// blocked (T < 0.92^16 = 0.26 even for the clearest glass, and no real façade has so
+/// many surfaces in a row).
+pub const MAX_GLAZING_CROSSINGS: usize = 16;
+
+/// Casts shadow rays for a scene: see the module.
+pub struct ShadowCaster<'a> {
+    caster: &'a dyn RayCaster,
+    geometry: &'a Geometry,
+    /// Per material, its glazing; empty when the scene has none.
+    glazing: Vec<Option<Glazing>>,
+    scene_scale: f32,
+}
+
+/// Buffers of one worker's shadow rays.
+#[derive(Default)]
+pub struct ShadowScratch {
+    occluded: Vec<bool>,
+    rays: RayBatch,
+    next: RayBatch,
+    hits: HitBatch,
+    /// Per ray of `rays` (and `next`), the index of the ray it continues.
+    index: Vec<u32>,
+    next_index: Vec<u32>,
+}
+
+impl<'a> ShadowCaster<'a> {
+    pub fn new(scene: &'a Scene, caster: &'a dyn RayCaster) -> ShadowCaster<'a> {
+        let glazing: Vec<Option<Glazing>> =
+            scene.materials.iter().map(|m| m.glazing.clone()).collect();
+        let any = glazing.iter().any(Option::is_some);
+        ShadowCaster {
+            caster,
+            geometry: &scene.geometry,
+            glazing: if any { glazing } else { Vec::new() },
+            scene_scale: scene.geometry.local_scale(),
+        }
+    }
+
+    /// The fraction of each ray's light that arrives, into `through` (resized): 0 where
+    /// an opaque surface lies between `tnear` and `tfar`, else the product of the
+    /// transmittances of the panes crossed (1 through none).
+    pub fn transmitted(&self, rays: &RayBatch, through: &mut Vec<f64>, s: &mut ShadowScratch) {
+        through.clear();
+        if self.glazing.is_empty() {
+            self.caster.occluded(rays, &mut s.occluded);
+            through.extend(s.occluded.iter().map(|&b| if b { 0.0 } else { 1.0 }));
+            return;
+        }
+        through.resize(rays.len(), 1.0);
+        s.rays.clone_from(rays);
+        s.index.clear();
+        s.index.extend(0..rays.len() as u32);
+        for _ in 0..MAX_GLAZING_CROSSINGS {
+            if s.rays.is_empty() {
+                return;
+            }
+            self.caster.intersect(&s.rays, &mut s.hits);
+            self.cross_panes(through, s);
+            std::mem::swap(&mut s.rays, &mut s.next);
+            std::mem::swap(&mut s.index, &mut s.next_index);
+        }
+        for &i in &s.index {
+            through[i as usize] = 0.0;
+        }
+    }
+
+    /// One round of [`Self::transmitted`]: each ray that hit glazing is attenuated and
+    /// goes on past it (into `s.next`); one that hit anything else is blocked.
+    fn cross_panes(&self, through: &mut [f64], s: &mut ShadowScratch) {
+        s.next.clear();
+        s.next_index.clear();
+        let r = &s.rays;
+        for k in 0..r.len() {
+            let i = s.index[k] as usize;
+            let Some(surface) = s.hits.surface(k, self.geometry) else {
+                continue;
+            };
+            let Some(glazing) = &self.glazing[surface.material as usize] else {
+                through[i] = 0.0;
+                continue;
+            };
+            let dir = Vec3::new(r.dx[k], r.dy[k], r.dz[k]);
+            let along = dir.normalize().dot(surface.normal);
+            through[i] *= glazing.reflect_transmit(along.abs() as f64).1;
+            let leave = if along > 0.0 {
+                surface.normal
+            } else {
+                -surface.normal
+            };
+            let origin = offset_origin(surface.point, leave, self.scene_scale);
+            let rest = r.tfar[k] - s.hits.t[k];
+            if through[i] > 0.0 && rest > 0.0 {
+                s.next.push(origin.to_array(), dir.to_array(), 0.0, rest);
+                s.next_index.push(i as u32);
+            }
+        }
+    }
+}
