@@ -4,8 +4,8 @@
 //! `data-chart` container), the page's error box must be empty and the console must
 //! show no uncaught error. Screenshots are saved as test artifacts in
 //! `<cargo target dir>/test-artifacts/` (`report.png`, `report_live.png`,
-//! `report_interrupted.png`, `report_edge.png`, `report_decided.png`). The template's
-//! marching squares (the isolux contours) also run there on small grids.
+//! `report_interrupted.png`, `report_edge.png`, `report_decided.png`, `report_sky.png`).
+//! The template's marching squares (the isolux contours) also run there on small grids.
 //!
 //! Without chromium (/usr/bin/chromium, or the path in `LUXTALLY_CHROMIUM`; scripts/setup.sh
 //! installs it) every test reports as ignored, with the reason: this file has its own
@@ -25,7 +25,7 @@ fn chromium_path() -> PathBuf {
 
 fn main() {
     let args = Arguments::from_args();
-    let tests: [(&str, fn()); 5] = [
+    let tests: [(&str, fn()); 6] = [
         (
             "report_of_a_finished_run_renders_every_chart_offline",
             report_of_a_finished_run_renders_every_chart_offline,
@@ -45,6 +45,10 @@ fn main() {
         (
             "contours_close_around_a_peak_skip_gaps_and_split_saddles",
             contours_close_around_a_peak_skip_gaps_and_split_saddles,
+        ),
+        (
+            "report_of_a_sky_scene_draws_each_skys_fisheye",
+            report_of_a_sky_scene_draws_each_skys_fisheye,
         ),
     ];
     let trials = tests
@@ -424,6 +428,80 @@ fn report_of_a_decided_run_draws_the_verdict_history() {
             .join(",")
     );
     assert!(html.contains(&decided), "the page says `{decided}`");
+}
+
+/// A sunny sky with its sun in the east and an overcast one beside a `sun` in the west:
+/// each sky gets its fisheye chart, drawn without errors, and the markers sit where the
+/// projection puts them (east on the left, west on the right, radius (90° − altitude)/90°).
+fn report_of_a_sky_scene_draws_each_skys_fisheye() {
+    let dir = temp_dir("sky");
+    let scene = r#"
+name = "sky"
+[[lights]]
+type = "sky"
+cie_type = 12
+sun_altitude_deg = 30
+sun_azimuth_deg = 90
+horizontal_illuminance_lx = 10000
+[[lights]]
+type = "sky"
+cie_type = 16
+zenith_luminance_cdm2 = 2000
+[[lights]]
+type = "sun"
+direct_normal_lx = 50000
+sun_altitude_deg = 45
+sun_azimuth_deg = 270
+[[receivers]]
+name = "open"
+corner = [0, 0, 0]
+u = [1, 0, 0]
+v = [0, 1, 0]
+cells = [4, 4]
+"#;
+    let path = dir.join("sky.toml");
+    std::fs::write(&path, scene).expect("scene written");
+    let out = Command::new(env!("CARGO_BIN_EXE_luxtally"))
+        .args([
+            "run",
+            path.to_str().unwrap(),
+            "--photons",
+            "20000",
+            "--quiet",
+        ])
+        .args(["--out", dir.join("out").to_str().unwrap()])
+        .output()
+        .expect("binary runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let html = assert_report_renders(&dir.join("out/report.html"), "report_sky", 1, 2);
+    for (chart, want) in [
+        ("sky:lights[0]", [-2.0 / 3.0, 0.0]),
+        ("sky:lights[1]", [0.5, 0.0]),
+    ] {
+        let tag = html
+            .split(&format!("data-chart=\"{chart}\""))
+            .nth(1)
+            .and_then(|rest| rest.split('>').next())
+            .unwrap_or_else(|| panic!("no chart {chart}"));
+        let sun: Vec<f64> = tag
+            .split("data-sun=\"")
+            .nth(1)
+            .and_then(|rest| rest.split('"').next())
+            .unwrap_or_else(|| panic!("{chart} has no sun marker: {tag}"))
+            .split(',')
+            .map(|x| x.parse().expect("a number"))
+            .collect();
+        for (got, want) in sun.iter().zip(want) {
+            assert!(
+                (got - want).abs() < 2e-3,
+                "{chart}: sun at {sun:?}, want {want}"
+            );
+        }
+    }
 }
 
 /// The text of `function NAME(...) {...}` in the report's template (braces matched).

@@ -89,6 +89,24 @@ pub trait Light: Debug + Send + Sync + Any {
     fn maintenance_factor(&self) -> f64 {
         1.0
     }
+
+    /// What a sky plot (`output::sky_plot`) shows of a daylight source: a sky's
+    /// luminance towards unit world direction `w` and the sun it follows, a sun's
+    /// position; None for any other light.
+    fn daylight(&self, _w: DVec3) -> Option<Daylight> {
+        None
+    }
+}
+
+/// A daylight source as a sky plot sees it ([`Light::daylight`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Daylight {
+    /// A sky's luminance towards the direction asked, cd/m² (its ground's below the
+    /// horizon): the function its photons and next events sample. None for a sun.
+    pub sky_luminance_cdm2: Option<f64>,
+    /// Unit direction towards the sun (world), where it is known and matters: a sun's,
+    /// or the one a CIE sky's indicatrix follows.
+    pub sun: Option<DVec3>,
 }
 
 /// Emission lanes photon by photon: photon k's origin and direction come from

@@ -374,6 +374,19 @@ impl Light for Sky {
             self.ground_luminance_cdm2()
         )
     }
+
+    /// Its luminance towards `w` ([`Sky::luminance`]), and its sun where its indicatrix
+    /// follows one (types 1, 3 and 5 and the others have none that matters).
+    fn daylight(&self, w: DVec3) -> Option<super::Daylight> {
+        let sun = match self.model {
+            SkyModel::Cie { kind, sun } if CIE_SKIES[kind as usize - 1][2] != 0.0 => Some(sun),
+            _ => None,
+        };
+        Some(super::Daylight {
+            sky_luminance_cdm2: Some(self.luminance(w)),
+            sun,
+        })
+    }
 }
 
 #[cfg(test)]

@@ -313,4 +313,12 @@ impl Light for Sun {
             self.ground_luminance_cdm2()
         )
     }
+
+    /// Where it is, for the sky plots' marker.
+    fn daylight(&self, _w: DVec3) -> Option<super::Daylight> {
+        Some(super::Daylight {
+            sky_luminance_cdm2: None,
+            sun: Some(self.towards),
+        })
+    }
 }

@@ -10,6 +10,7 @@ pub mod ply;
 pub mod preview;
 pub mod receiver_files;
 pub mod report;
+pub mod sky_plot;
 pub mod summary;
 
 pub use image::Image;

@@ -87,6 +87,10 @@ pub struct Summary {
     /// The `[[observers]]`' UGR by name (absent without any; docs/ugr.md).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub observers: Option<BTreeMap<String, super::observers::ObserverSummary>>,
+    /// Each sky's luminance on a fisheye grid, for report.html (absent without skies;
+    /// docs/daylight.md, *Sky plots*).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub sky_plots: Vec<super::sky_plot::SkyPlot>,
 }
 
 #[derive(Serialize, Deserialize, Default)]
@@ -328,6 +332,7 @@ pub fn build(state: &RunState<'_>) -> Summary {
             .then(|| verdicts(scene, t, &state.setup.observer_visible)),
         forecast: forecast_summary(state),
         observers: super::observers::observers(state),
+        sky_plots: super::sky_plot::sky_plots(scene),
     }
 }
 

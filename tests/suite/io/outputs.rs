@@ -1,14 +1,17 @@
 //! The files a run writes read back to the numbers of summary.json: receiver EXR (with
 //! the exr crate) and CSV, the scene map PLY (with a minimal PLY reader written here,
-//! independent of the writer), the PNG previews and a self-contained report.html.
+//! independent of the writer), the PNG previews, a self-contained report.html and the
+//! skies' fisheye plots.
 
 use crate::common;
 
 use common::*;
 use luxtally::accel::Backend;
+use luxtally::light::sun::direction;
 use luxtally::output::{summary, write_all, Finished, Outputs};
 use luxtally::run::run;
 use luxtally::stats::{relative_error, triangle_illuminance_lx, MapKind};
+use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
@@ -448,4 +451,110 @@ fn report_rebuilds_from_an_older_summary_missing_newer_keys() {
     assert!(dir.join("report.html").is_file());
     assert!(dir.join("receivers/desk.png").is_file());
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Two skies and a sun over an open receiver: summary.json's `sky_plots` has a plot per
+/// sky (none for the sun), 64 × 64 pixels, null exactly beyond the horizon circle, each
+/// sky's marker (type 12 its own sun, type 16 the scene's), and ∫L cos θ dω summed over
+/// the pixels gives each sky's horizontal illuminance. In the equidistant projection a
+/// pixel of side h = 2/64 at radius r (zenith angle θ = r·π/2) spans h²·(π/2)·sin θ/r sr.
+/// The tolerance is the midpoint rule's error bound on this grid: a pixel the horizon
+/// cuts errs by at most h²·(π²/4)·L_h·√2h/(1 − √2h) (the integrand g = L cos θ·(π/2)
+/// sin θ/r falls to 0 at the horizon with slope (π²/4)·L·sin θ/r, and such a pixel lies
+/// within √2h of it), there are at most 8/h + 4 of them (a quarter circle, monotone,
+/// crosses at most 2/h + 1 pixels), and the whole pixels add their leading error
+/// (h²/24)·∮∂g/∂n = π³h²L_h/48; L_h the greatest luminance within √2h of the horizon.
+#[test]
+fn sky_plots_in_summary_integrate_to_each_skys_horizontal_illuminance() {
+    let toml = r#"
+name = "skies"
+[[lights]]
+type = "sky"
+cie_type = 12
+sun_altitude_deg = 30
+sun_azimuth_deg = 200
+horizontal_illuminance_lx = 10000
+[[lights]]
+type = "sky"
+cie_type = 16
+zenith_luminance_cdm2 = 3000
+[[lights]]
+type = "sun"
+direct_normal_lx = 80000
+sun_altitude_deg = 40
+sun_azimuth_deg = 120
+[[receivers]]
+name = "open"
+corner = [0, 0, 0]
+u = [1, 0, 0]
+v = [0, 1, 0]
+cells = [2, 2]
+"#;
+    let scene = scene(toml);
+    let opts = options(&scene, 20_000, 2, Backend::Embree);
+    let result = run(&scene, &opts, &AtomicBool::new(false), &mut ()).expect("run succeeds");
+    let state = result.state(&scene, &opts);
+    let dir = temp_dir("sky-plots");
+    let finished = Finished {
+        run: Some(&state),
+        image: None,
+    };
+    write_all(&dir, finished, Outputs::ALL).expect("outputs written");
+    let text = std::fs::read_to_string(dir.join("summary.json")).expect("summary.json");
+    let s: summary::Summary = serde_json::from_str(&text).expect("summary.json reads back");
+    let labels: Vec<&str> = s.sky_plots.iter().map(|p| p.light.as_str()).collect();
+    assert_eq!(
+        labels,
+        ["lights[0]", "lights[1]"],
+        "a plot per sky, none for the sun"
+    );
+    let want_lx = [10_000.0, 7.0 * PI / 9.0 * 3000.0];
+    let markers = [("lights[0]", 30.0, 200.0), ("lights[2]", 40.0, 120.0)];
+    for ((plot, want), (from, alt, az)) in s.sky_plots.iter().zip(want_lx).zip(markers) {
+        let n = plot.size;
+        assert_eq!((n, plot.luminance_cdm2.len()), (64, 64 * 64));
+        assert_eq!(plot.projection, "equidistant");
+        assert_eq!(plot.sun_light.as_deref(), Some(from));
+        assert!((plot.sun_altitude_deg.unwrap() - alt).abs() < 1e-9);
+        assert!((plot.sun_azimuth_deg.unwrap() - az).abs() < 1e-9);
+        let h = 2.0 / n as f64;
+        let mut sum_lx = 0.0;
+        for (k, &l) in plot.luminance_cdm2.iter().enumerate() {
+            let x = (k % n) as f64 * h + h / 2.0 - 1.0;
+            let y = 1.0 - (k / n) as f64 * h - h / 2.0;
+            let r = (x * x + y * y).sqrt();
+            assert_eq!(l.is_nan(), r >= 1.0, "pixel {k} at radius {r}: {l}");
+            if r < 1.0 {
+                let theta = r * PI / 2.0;
+                sum_lx += l * libm::cos(theta) * h * h * PI / 2.0 * libm::sin(theta) / r;
+            }
+        }
+        let light = &scene
+            .lights
+            .iter()
+            .find(|l| l.label == plot.light)
+            .unwrap()
+            .kind;
+        let band_deg = 2f64.sqrt() * h * 90.0;
+        let l_h = (0..3600 * 8)
+            .map(|k| {
+                let alt = (k / 3600) as f64 / 7.0 * band_deg + 1e-6;
+                let w = direction(alt, (k % 3600) as f64 / 10.0);
+                light.daylight(w).unwrap().sky_luminance_cdm2.unwrap()
+            })
+            .fold(0.0, f64::max);
+        // sin θ/r ≤ 1/r ≤ 1/(1 − √2h) in those pixels.
+        let edge = l_h * 2f64.sqrt() * h / (1.0 - 2f64.sqrt() * h);
+        let boundary = (8.0 / h + 4.0) * h * h * (PI * PI / 4.0) * edge;
+        let tolerance = boundary + PI * PI * PI * h * h * l_h / 48.0;
+        eprintln!(
+            "{}: ∑L cos θ ω = {sum_lx} lx, exact {want}, tolerance {tolerance}",
+            plot.light
+        );
+        assert!(
+            (sum_lx - want).abs() <= tolerance,
+            "{}: ∑L cos θ ω = {sum_lx} lx against {want} (tolerance {tolerance})",
+            plot.light
+        );
+    }
 }
