@@ -303,3 +303,26 @@ fn bad_portals_are_rejected_in_one_line() {
         );
     }
 }
+
+/// The bundled side-lit office (`scenes/daylit_office.toml`, overcast): in each of the
+/// middle columns the daylight factor by the window exceeds the one at the back of the
+/// room by more than 4σ of their difference (two cells' photons are positively
+/// correlated, if at all, so σ_f² + σ_b² bounds its variance).
+#[test]
+fn the_daylit_offices_daylight_factor_falls_from_window_to_back() {
+    let text = std::fs::read_to_string("scenes/daylit_office.toml").expect("bundled scene");
+    let s = run_with(&scene(&text), 16_000_000, Estimator::NextEvent, 1);
+    let r = &s.receivers["df_grid"];
+    let df = r.daylight_factor.as_ref().expect("a daylight factor");
+    let nu = r.cells[0] as usize;
+    let back = (r.cells[1] as usize - 1) * nu;
+    for i in 4..8 {
+        let (f, b) = (i, back + i);
+        let z = (df.values[f] - df.values[b]) / libm::hypot(df.sigma[f], df.sigma[b]);
+        eprintln!(
+            "column {i}: {:.2} ± {:.2} % by the window, {:.2} ± {:.2} % at the back",
+            df.values[f], df.sigma[f], df.values[b], df.sigma[b]
+        );
+        assert!(z > 4.0, "column {i}: z {z:.1}");
+    }
+}
