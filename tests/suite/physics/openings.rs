@@ -1,7 +1,8 @@
 //! Daylight through openings (docs/daylight.md): `[[portals]]` aiming the sky's next
 //! events at a roof opening (calibrated where the whole-sky sampling is not yet, and
 //! unbiased when a portal covers only part of the opening, none of it, or when light
-//! reflected outside also comes in), next events and the eye pass through glazing
+//! reflected outside also comes in), a wall window (the sky on the floor, the ground on
+//! the ceiling), next events and the eye pass through glazing
 //! against T(θ) times the sky, and bad portals.
 
 use super::daylight::{roof_opening, run_with};
@@ -325,4 +326,109 @@ fn the_daylit_offices_daylight_factor_falls_from_window_to_back() {
         );
         assert!(z > 4.0, "column {i}: z {z:.1}");
     }
+}
+
+/// A closed black box 4 × 4 × 3 m with a 1 × 1 m window in its south wall (y = 0,
+/// x 1.5–2.5, z 1–2) and its portal, under `lights`; receivers on the floor (0.001 up,
+/// facing up) and under the ceiling (0.001 down, facing down), 16 × 16 cells each.
+fn wall_window(lights: &str) -> String {
+    let rect = |corner: [f64; 3], u: [f64; 3], v: [f64; 3]| {
+        format!(
+            "[[objects]]\nshape = \"rect\"\ncorner = {corner:?}\nu = {u:?}\nv = {v:?}\nmaterial = \"black\"\n"
+        )
+    };
+    let mut t = String::from("[materials.black]\nreflectance = 0\n");
+    t += &rect([0.0, 0.0, 0.0], [4.0, 0.0, 0.0], [0.0, 4.0, 0.0]);
+    t += &rect([0.0, 0.0, 3.0], [0.0, 4.0, 0.0], [4.0, 0.0, 0.0]);
+    t += &rect([0.0, 4.0, 0.0], [4.0, 0.0, 0.0], [0.0, 0.0, 3.0]);
+    t += &rect([0.0, 0.0, 0.0], [0.0, 4.0, 0.0], [0.0, 0.0, 3.0]);
+    t += &rect([4.0, 0.0, 0.0], [0.0, 0.0, 3.0], [0.0, 4.0, 0.0]);
+    // The south wall around the window.
+    t += &rect([0.0, 0.0, 0.0], [4.0, 0.0, 0.0], [0.0, 0.0, 1.0]);
+    t += &rect([0.0, 0.0, 2.0], [4.0, 0.0, 0.0], [0.0, 0.0, 1.0]);
+    t += &rect([0.0, 0.0, 1.0], [1.5, 0.0, 0.0], [0.0, 0.0, 1.0]);
+    t += &rect([2.5, 0.0, 1.0], [1.5, 0.0, 0.0], [0.0, 0.0, 1.0]);
+    t + lights
+        + "[[portals]]\ncorner = [1.5, 0, 1]\nu = [1, 0, 0]\nv = [0, 0, 1]\n\
+           [[receivers]]\nname = \"floor\"\ncorner = [0, 0, 0.001]\nu = [4, 0, 0]\nv = [0, 4, 0]\n\
+           cells = [16, 16]\n[[receivers]]\nname = \"ceiling\"\ncorner = [0, 0, 2.999]\n\
+           u = [0, 4, 0]\nv = [4, 0, 0]\ncells = [16, 16]\n"
+}
+
+/// E at (x, y, z) inside [`wall_window`] on a horizontal receiver facing up (`up`) or
+/// down, from the window: ∫ L(cos Z)·|cos θ_receiver|·cos θ_window / r² dA over the
+/// window, cos Z = the direction's z-component (negative below the horizon), by 8 × 8
+/// Gauss–Legendre on 4 × 4 panels.
+fn through_window(x: f64, y: f64, z: f64, l: &dyn Fn(f64) -> f64) -> f64 {
+    let f = |a: f64, c: f64| {
+        let d = (a - x, -y, c - z);
+        let r2 = d.0 * d.0 + d.1 * d.1 + d.2 * d.2;
+        let r = r2.sqrt();
+        l(d.2 / r) * d.2.abs() * y / (r2 * r2)
+    };
+    let mut sum = 0.0;
+    for p in 0..16 {
+        let (a0, c0) = (1.5 + (p % 4) as f64 * 0.25, 1.0 + (p / 4) as f64 * 0.25);
+        sum += cell_average(f, a0, a0 + 0.25, c0, c0 + 0.25) * 0.0625;
+    }
+    sum
+}
+
+/// Through a wall window with its portal, every cell against the window integral,
+/// z-calibrated: on the floor the sky, uniform and the traditional overcast sky (its
+/// luminance by each direction's altitude); under the ceiling the ground the window
+/// shows below the horizon, a Lambertian emitter of ρg·E_h/π.
+#[test]
+fn the_sky_and_the_ground_through_a_wall_window() {
+    let uniform = "[[lights]]\ntype = \"sky\"\nmodel = \"uniform\"\nzenith_luminance_cdm2 = 1000\n\
+                   ground_reflectance = 0.2\n";
+    let overcast = "[[lights]]\ntype = \"sky\"\ncie_type = 16\nzenith_luminance_cdm2 = 1000\n\
+                    ground_reflectance = 0\n";
+    let cell = |i: usize, j: usize, z: f64, l: &dyn Fn(f64) -> f64| {
+        let (x0, y0) = (i as f64 * 0.25, j as f64 * 0.25);
+        cell_average(
+            |x, y| through_window(x, y, z, l),
+            x0,
+            x0 + 0.25,
+            y0,
+            y0 + 0.25,
+        )
+    };
+    let s = run_with(
+        &scene(&wall_window(uniform)),
+        100_000,
+        Estimator::NextEvent,
+        1,
+    );
+    let sky = |cos_z: f64| if cos_z > 0.0 { 1000.0 } else { 0.0 };
+    assert_matches(
+        &s.receivers["floor"],
+        |i, j| cell(i, j, 0.001, &sky),
+        "uniform sky, floor",
+    );
+    // The ground: ρg·E_h/π = 0.2·π·1000/π. The ceiling's cells run along y first.
+    let ground = |cos_z: f64| if cos_z < 0.0 { 200.0 } else { 0.0 };
+    assert_matches(
+        &s.receivers["ceiling"],
+        |i, j| cell(j, i, 2.999, &ground),
+        "the ground on the ceiling",
+    );
+    let s = run_with(
+        &scene(&wall_window(overcast)),
+        100_000,
+        Estimator::NextEvent,
+        2,
+    );
+    let cie16 = |cos_z: f64| {
+        if cos_z > 0.0 {
+            1000.0 * (1.0 + 2.0 * cos_z) / 3.0
+        } else {
+            0.0
+        }
+    };
+    assert_matches(
+        &s.receivers["floor"],
+        |i, j| cell(i, j, 0.001, &cie16),
+        "overcast sky, floor",
+    );
 }
