@@ -312,6 +312,23 @@ fn reports_of_a_live_run_and_of_a_run_stopped_by_ctrl_c_render() {
     assert_report_renders(&report, "report_interrupted", 1, 0);
 }
 
+/// Writes `scene` as DIR/NAME.toml and runs it for `photons` into DIR/out.
+fn run_scene(dir: &Path, name: &str, scene: &str, photons: u64) {
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, scene).expect("scene written");
+    let out = Command::new(env!("CARGO_BIN_EXE_luxtally"))
+        .args(["run", path.to_str().unwrap(), "--quiet"])
+        .args(["--photons", &photons.to_string()])
+        .args(["--out", dir.join("out").to_str().unwrap()])
+        .output()
+        .expect("binary runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn report_of_dark_tall_and_luminance_receivers_renders() {
     let dir = temp_dir("edge");
     // A receiver no photon reaches (nothing scored), a 1 × 600 strip, a luminance meter,
@@ -365,24 +382,7 @@ u = [2, 0, 0]
 v = [0, 2, 0]
 cells = [4, 4]
 "#;
-    let path = dir.join("edge.toml");
-    std::fs::write(&path, scene).expect("scene written");
-    let out = Command::new(env!("CARGO_BIN_EXE_luxtally"))
-        .args([
-            "run",
-            path.to_str().unwrap(),
-            "--photons",
-            "300000",
-            "--quiet",
-        ])
-        .args(["--out", dir.join("out").to_str().unwrap()])
-        .output()
-        .expect("binary runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    run_scene(&dir, "edge", scene, 300_000);
     assert_report_renders(&dir.join("out/report.html"), "report_edge", 5, 0);
 }
 
@@ -459,24 +459,7 @@ u = [1, 0, 0]
 v = [0, 1, 0]
 cells = [4, 4]
 "#;
-    let path = dir.join("sky.toml");
-    std::fs::write(&path, scene).expect("scene written");
-    let out = Command::new(env!("CARGO_BIN_EXE_luxtally"))
-        .args([
-            "run",
-            path.to_str().unwrap(),
-            "--photons",
-            "20000",
-            "--quiet",
-        ])
-        .args(["--out", dir.join("out").to_str().unwrap()])
-        .output()
-        .expect("binary runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    run_scene(&dir, "sky", scene, 20_000);
     let html = assert_report_renders(&dir.join("out/report.html"), "report_sky", 1, 2);
     for (chart, want) in [
         ("sky:lights[0]", [-2.0 / 3.0, 0.0]),
