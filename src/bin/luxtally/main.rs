@@ -53,7 +53,16 @@ enum Command {
     UgrTable(ugr_table::UgrTableArgs),
     /// Print each sky's and sun's model, zenith luminance, horizontal illuminance, sun
     /// position and ground luminance (the `type = "sky"` and `"sun"` lights of SCENE).
-    Sky { scene: PathBuf },
+    /// With --patches MF, also each sky's Reinhart MF:n sky vector (MF 1 = Tregenza's
+    /// 145 patches): its horizontal illuminance from the patches' centre and mean
+    /// luminances against the exact integral, and with --vector FILE the patches as CSV.
+    Sky {
+        scene: PathBuf,
+        #[arg(long, value_name = "MF")]
+        patches: Option<u32>,
+        #[arg(long, value_name = "FILE", requires = "patches")]
+        vector: Option<PathBuf>,
+    },
     /// List the EN 12464-1 task types a requirement's `task` can name, with their values.
     Tasks,
     /// Ray throughput of every backend and ray API on a scene (incoherent random rays),
@@ -83,7 +92,11 @@ fn main() -> ExitCode {
         Command::Report { out_dir } => luxtally::output::rebuild_report(&out_dir),
         Command::Photometry(args) => photometry::command(args),
         Command::UgrTable(args) => ugr_table::command(args),
-        Command::Sky { scene } => sky_command(&scene),
+        Command::Sky {
+            scene,
+            patches,
+            vector,
+        } => sky_command(&scene, patches, vector.as_deref()),
         Command::Tasks => {
             print!("{}", luxtally::scene::tasks::table_text());
             Ok(())
@@ -103,10 +116,23 @@ fn main() -> ExitCode {
     }
 }
 
-/// `luxtally sky SCENE`: the scene's daylight sources, described.
-fn sky_command(path: &std::path::Path) -> luxtally::Result<()> {
+/// `luxtally sky SCENE [--patches MF [--vector FILE]]`: the scene's daylight sources,
+/// described, and each sky's patches.
+fn sky_command(
+    path: &std::path::Path,
+    patches: Option<u32>,
+    vector: Option<&std::path::Path>,
+) -> luxtally::Result<()> {
     use luxtally::light::{Sky, Sun};
     let scene = luxtally::scene::load(path)?;
+    let patches = match patches {
+        Some(mf) => Some(luxtally::light::patches::SkyPatches::reinhart(
+            mf,
+            "--patches",
+        )?),
+        None => None,
+    };
+    let mut csv = String::new();
     let mut any = false;
     for l in &scene.lights {
         let text = match (l.get::<Sky>(), l.get::<Sun>()) {
@@ -116,9 +142,22 @@ fn sky_command(path: &std::path::Path) -> luxtally::Result<()> {
         };
         println!("{}: {text}", l.label);
         any = true;
+        if let (Some(p), Some(sky)) = (&patches, l.get::<Sky>()) {
+            let luminance = |w| sky.luminance(w);
+            let summary = p.vector_summary(&luminance, sky.horizontal_lx);
+            println!("{}: {summary}", l.label);
+            csv += &p.vector_csv(&l.label, &luminance);
+        }
     }
     if !any {
         println!("{}: no type = \"sky\" or \"sun\" lights", path.display());
+    }
+    if let Some(file) = vector {
+        let header = "light,patch,altitude_low_deg,altitude_high_deg,azimuth_low_deg,\
+                      azimuth_high_deg,solid_angle_sr,centre_cdm2,mean_cdm2\n";
+        std::fs::write(file, format!("{header}{csv}")).map_err(|e| {
+            luxtally::Error::input(file.display().to_string(), format!("cannot write: {e}"))
+        })?;
     }
     Ok(())
 }

@@ -313,6 +313,65 @@ fn tasks_lists_the_task_types() {
     }
 }
 
+/// `luxtally sky --patches MF --vector FILE`: the sky vector of Reinhart MF:2 (577
+/// patches) as CSV, whose patch means reproduce the sky's exact horizontal
+/// illuminance to the patch-uniform discretisation (Σ L̄·∫cos dω within 0.2 % for the
+/// overcast sky; the solid angles sum to 2π); a bad MF is one line.
+#[test]
+fn sky_writes_a_reinhart_sky_vector() {
+    let dir = temp_dir("sky-vector");
+    let scene = dir.join("day.toml");
+    std::fs::write(
+        &scene,
+        "[[lights]]\ntype = \"sky\"\ncie_type = 16\nhorizontal_illuminance_lx = 7000\n\
+         [[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\ncells = [1, 1]\n",
+    )
+    .unwrap();
+    let csv = dir.join("vector.csv");
+    let s = scene.to_str().unwrap();
+    let out = luxtally(&[
+        "sky",
+        s,
+        "--patches",
+        "2",
+        "--vector",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("Reinhart MF:2 (577 patches)"), "{text}");
+    let rows: Vec<Vec<f64>> = std::fs::read_to_string(&csv)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').skip(1).map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 577);
+    let (mut omega, mut e) = (0.0, 0.0);
+    for r in &rows {
+        let (s0, s1) = (libm::sin(r[1].to_radians()), libm::sin(r[2].to_radians()));
+        let width = (r[4] - r[3]).to_radians();
+        omega += r[5];
+        e += r[7] * 0.5 * width * (s1 * s1 - s0 * s0);
+    }
+    assert!(
+        (omega - 2.0 * std::f64::consts::PI).abs() < 1e-6,
+        "Σ Ω = {omega}"
+    );
+    assert!((e / 7000.0 - 1.0).abs() < 2e-3, "E from the vector: {e}");
+    let out = luxtally(&["sky", s, "--patches", "13"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        err.contains("--patches") && err.trim().lines().count() == 1,
+        "{err}"
+    );
+}
+
 /// `luxtally sky SCENE` describes each sky and sun: model, Lz, horizontal illuminance,
 /// the sun's position.
 #[test]
