@@ -432,3 +432,71 @@ fn the_sky_and_the_ground_through_a_wall_window() {
         "overcast sky, floor",
     );
 }
+
+/// Coverage of the daylight factor's mean and least-cell intervals over 200 seeds: the
+/// overcast sky through [`wall_window`]'s portal onto a 4 × 4 DF grid 0.5 m in from
+/// the walls, 20,000 photons a run (the least cell is a back corner, where the window is
+/// seen at grazing angles). Each interval must cover the exact figure at ≥ 95 % within
+/// 3 binomial σ, and the mean's not much more often; the mean's z-scores average 0.
+#[test]
+fn daylight_factor_intervals_cover_over_seeds() {
+    let overcast = "[[lights]]\ntype = \"sky\"\ncie_type = 16\nzenith_luminance_cdm2 = 1\n\
+                    ground_reflectance = 0\n";
+    let text = wall_window(overcast).replace(
+        "name = \"floor\"\ncorner = [0, 0, 0.001]\nu = [4, 0, 0]\nv = [0, 4, 0]\ncells = [16, 16]",
+        "name = \"floor\"\ncorner = [0.5, 0.5, 0.001]\nu = [3, 0, 0]\nv = [0, 3, 0]\ncells = [4, 4]\n\
+         daylight_factor = true",
+    );
+    let scene = scene(&text);
+    let cie16 = |cos_z: f64| {
+        if cos_z > 0.0 {
+            (1.0 + 2.0 * cos_z) / 3.0
+        } else {
+            0.0
+        }
+    };
+    let exact: Vec<f64> = (0..16)
+        .map(|k| {
+            let (x0, y0) = (0.5 + (k % 4) as f64 * 0.75, 0.5 + (k / 4) as f64 * 0.75);
+            let e = cell_average(
+                |x, y| through_window(x, y, 0.001, &cie16),
+                x0,
+                x0 + 0.75,
+                y0,
+                y0 + 0.75,
+            );
+            100.0 * e / (7.0 * PI / 9.0)
+        })
+        .collect();
+    let mean = exact.iter().sum::<f64>() / 16.0;
+    let min = exact.iter().copied().fold(f64::INFINITY, f64::min);
+    let seeds = 200;
+    let (mut covered, mut unreliable) = ([0u32; 2], 0);
+    let mut zsum = 0.0;
+    for seed in 1..=seeds {
+        let s = run_with(&scene, 20_000, Estimator::NextEvent, seed);
+        let r = &s.receivers["floor"];
+        let df = r.daylight_factor.as_ref().expect("a daylight factor");
+        covered[0] += df.mean.covers(mean) as u32;
+        // The mean's z-score, its σ from the 95 % interval's half-width.
+        zsum += (df.mean.value - mean) / ((df.mean.high - df.mean.low) / 3.92);
+        covered[1] += df.min.covers(min) as u32;
+        unreliable += (r.unreliable_cells > 0) as u32;
+    }
+    let n = seeds as f64;
+    let slack = 3.0 * (0.95 * 0.05 / n).sqrt();
+    let rates = covered.map(|c| c as f64 / n);
+    let mean_z = zsum / n;
+    eprintln!(
+        "DF coverage: mean {}, min {}; mean z {mean_z:+.3}; {unreliable} runs with unreliable cells",
+        rates[0], rates[1]
+    );
+    // Unbiased: the mean of 200 unit normals is within 0.07 of 0 (1σ).
+    assert!(mean_z.abs() < 0.25, "mean z {mean_z}");
+    assert!(rates.iter().all(|&r| r >= 0.95 - slack), "{rates:?}");
+    assert!(
+        rates[0] <= 0.95 + slack,
+        "the mean's interval is too wide: {}",
+        rates[0]
+    );
+}
