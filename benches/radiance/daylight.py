@@ -275,8 +275,8 @@ def window_flux_ratio(lz, lg, tns, n_th=400, n_ph=400):
 
 
 def hits_quad(o, d, quad):
-    c, a, b, _ = quad[0], quad[1], quad[3], None
-    u, v = sub(a, c), sub(b, c)
+    c = quad[0]
+    u, v = sub(quad[1], c), sub(quad[3], c)
     n = cross(u, v)
     den = dot(n, d)
     if abs(den) < 1e-15:
