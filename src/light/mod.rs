@@ -59,6 +59,7 @@ registry! {
 }
 
 pub mod distant;
+pub mod perez;
 
 /// A validated light source, world coordinates.
 pub trait Light: Debug + Send + Sync + Any {

@@ -54,6 +54,9 @@ enum Command {
     /// Print each sky's and sun's model, zenith luminance, horizontal illuminance, sun
     /// position and ground luminance (the `type = "sky"` and `"sun"` lights of SCENE).
     Sky { scene: PathBuf },
+    /// Read an EPW weather file and print its site, hours, missing hours and annual
+    /// radiation sums (not yet used by runs).
+    Weather { file: PathBuf },
     /// List the EN 12464-1 task types a requirement's `task` can name, with their values.
     Tasks,
     /// Ray throughput of every backend and ray API on a scene (incoherent random rays),
@@ -84,6 +87,9 @@ fn main() -> ExitCode {
         Command::Photometry(args) => photometry::command(args),
         Command::UgrTable(args) => ugr_table::command(args),
         Command::Sky { scene } => sky_command(&scene),
+        Command::Weather { file } => {
+            luxtally::weather::read_epw(&file).map(|w| print!("{}", w.summary()))
+        }
         Command::Tasks => {
             print!("{}", luxtally::scene::tasks::table_text());
             Ok(())
