@@ -86,7 +86,7 @@ pub fn parse_epw(text: &str, origin: &str) -> Result<Weather> {
         ));
     }
     let location = location(lines[0], origin)?;
-    let expected = expected_records(&lines[4], &lines[7], origin)?;
+    let expected = expected_records(lines[4], lines[7], origin)?;
     let mut hours = Vec::with_capacity(expected);
     for (i, line) in lines.iter().enumerate().skip(8) {
         if line.trim().is_empty() {

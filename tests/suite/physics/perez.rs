@@ -163,11 +163,11 @@ fn the_sky_integrates_to_its_diffuse_illuminance() {
         let mut sum = 0.0;
         for i in 0..nt {
             let t = (i as f64 + 0.5) * dt;
-            let (st, ct) = (t.sin(), t.cos());
+            let (st, ct) = (libm::sin(t), libm::cos(t));
             let mut ring = 0.0;
             for j in 0..np {
                 let f = (j as f64 + 0.5) * dp;
-                ring += model.relative(glam::DVec3::new(st * f.cos(), st * f.sin(), ct));
+                ring += model.relative(glam::DVec3::new(st * libm::cos(f), st * libm::sin(f), ct));
             }
             sum += ring * ct * st;
         }
