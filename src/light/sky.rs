@@ -1,6 +1,7 @@
 //! Skies: `type = "sky"`, the 15 CIE standard general skies (ISO 15469:2004 / CIE S
 //! 011/E:2003), the CIE traditional overcast sky (Moon & Spencer, `cie_type = 16`) and
-//! the uniform sky, at a zenith luminance or a diffuse horizontal illuminance, with the
+//! the uniform sky, at a zenith luminance or a diffuse horizontal illuminance, and the
+//! Perez all-weather sky from an hour's irradiance (`perez.rs`), with the
 //! ground below the horizon as a Lambertian emitter of ρ·E_h/π (docs/daylight.md). The
 //! sky excludes the sun's disc: that is `type = "sun"`.
 
@@ -168,7 +169,7 @@ impl SkyModel {
 pub struct SkyFile {
     /// 1–15: the CIE standard general skies; 16: the CIE traditional overcast sky.
     pub cie_type: Option<i64>,
-    /// `"uniform"` instead of a CIE type.
+    /// `"uniform"` or `"perez"` instead of a CIE type.
     pub model: Option<String>,
     pub zenith_luminance_cdm2: Option<f64>,
     /// The sky's illuminance on an unobstructed horizontal plane (the diffuse

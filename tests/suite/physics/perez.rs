@@ -438,3 +438,36 @@ fn missing_hours_and_a_far_time_zone_are_counted_warnings() {
     let w = luxtally::weather::parse_epw(&west, "w.epw").unwrap();
     assert_eq!(w.warnings, ["w.epw: line 1: time zone -2 h is 2.9 h from the longitude's +0.89 h (13.4°): EPW counts both positive east (WEA and Radiance count west)"]);
 }
+
+/// A leap year's file (HOLIDAYS/DAYLIGHT SAVINGS says Yes) from 28 February to 1 March
+/// holds 72 records; a sub-hourly file is refused in one line.
+#[test]
+fn leap_days_and_sub_hourly_periods() {
+    let leap = epw(BERLIN, 3)
+        .replace(
+            "HOLIDAYS/DAYLIGHT SAVINGS,No",
+            "HOLIDAYS/DAYLIGHT SAVINGS,Yes",
+        )
+        .replace("Sunday, 1/ 1, 1/ 3", "Sunday, 2/28, 3/ 1");
+    let w = luxtally::weather::parse_epw(&leap, "l.epw").unwrap();
+    assert_eq!(w.hours.len(), 72);
+    let no_leap = leap.replace(
+        "HOLIDAYS/DAYLIGHT SAVINGS,Yes",
+        "HOLIDAYS/DAYLIGHT SAVINGS,No",
+    );
+    let e = luxtally::weather::parse_epw(&no_leap, "l.epw")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "l.epw: 72 hourly records, but DATA PERIODS (line 8) makes 48 (a truncated file?)"
+    );
+    let sub = epw(BERLIN, 1).replace("DATA PERIODS,1,1,", "DATA PERIODS,1,4,");
+    let e = luxtally::weather::parse_epw(&sub, "s.epw")
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "s.epw: line 8: 1 periods of 4 records per hour: only one hourly period is supported"
+    );
+}
