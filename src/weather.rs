@@ -195,28 +195,33 @@ fn expected_records(holidays: &str, periods: &str, origin: &str) -> Result<usize
         == Some(true);
     let day = |s: &str| -> Option<usize> {
         let (m, d) = s.split_once('/')?;
-        let (m, d): (usize, usize) = (m.trim().parse().ok()?, d.trim().parse().ok()?);
-        let lengths = [
-            31,
-            28 + leap as usize,
-            31,
-            30,
-            31,
-            30,
-            31,
-            31,
-            30,
-            31,
-            30,
-            31,
-        ];
-        ((1..=12).contains(&m) && (1..=lengths[m - 1]).contains(&d))
-            .then(|| lengths[..m - 1].iter().sum::<usize>() + d)
+        day_of_year(m.trim().parse().ok()?, d.trim().parse().ok()?, leap)
     };
     match (day(f[5]), day(f[6])) {
         (Some(a), Some(b)) if b >= a => Ok((b - a + 1) * 24),
         _ => Err(bad()),
     }
+}
+
+/// The day of the year (1 January = 1) of month `m`, day `d`, or None if there is no
+/// such day.
+pub fn day_of_year(m: usize, d: usize, leap: bool) -> Option<usize> {
+    let lengths = [
+        31,
+        28 + leap as usize,
+        31,
+        30,
+        31,
+        30,
+        31,
+        31,
+        30,
+        31,
+        30,
+        31,
+    ];
+    ((1..=12).contains(&m) && (1..=lengths[m - 1]).contains(&d))
+        .then(|| lengths[..m - 1].iter().sum::<usize>() + d)
 }
 
 /// One record (line `n`, 1-based).

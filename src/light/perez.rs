@@ -346,29 +346,11 @@ fn gradation(a: f64, b: f64, z: f64) -> f64 {
 
 /// The day of the year (1 January = 1) of "YYYY-MM-DD" (Gregorian), or None.
 pub fn day_of_year(date: &str) -> Option<f64> {
-    let parts: Vec<i64> = date
-        .trim()
-        .split('-')
+    let parts: Vec<i64> = (date.trim().split('-'))
         .map(|p| p.trim().parse().ok())
         .collect::<Option<_>>()?;
     let [y, m, d] = parts[..] else { return None };
     let leap = (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
-    let lengths = [
-        31,
-        if leap { 29 } else { 28 },
-        31,
-        30,
-        31,
-        30,
-        31,
-        31,
-        30,
-        31,
-        30,
-        31,
-    ];
-    if !(1..=12).contains(&m) || !(1..=lengths[m as usize - 1]).contains(&d) {
-        return None;
-    }
-    Some((lengths[..m as usize - 1].iter().sum::<i64>() + d) as f64)
+    let (m, d) = (usize::try_from(m).ok()?, usize::try_from(d).ok()?);
+    crate::weather::day_of_year(m, d, leap).map(|n| n as f64)
 }
