@@ -191,8 +191,12 @@ fn perez_band_bounds_hold_everywhere_in_their_band() {
                 (70.0, 300.0),
                 (89.9, 0.0),
             ] {
-                let Ok(p) = perez(dni, dhi, alt, az, 100.0) else {
-                    continue;
+                let p = match perez(dni, dhi, alt, az, 100.0) {
+                    Ok(p) => p,
+                    Err(e) => {
+                        eprintln!("refused: I {dni}, Dh {dhi}, altitude {alt}: {e}");
+                        continue;
+                    }
                 };
                 skies += 1;
                 cats[p.category - 1] += 1;
@@ -211,6 +215,7 @@ fn perez_band_bounds_hold_everywhere_in_their_band() {
             }
         }
     }
+    eprintln!("bounds checked on {skies} skies, per category {cats:?}");
     assert!(
         skies >= 100 && cats.iter().all(|&n| n > 0),
         "{skies} skies, categories {cats:?}"
