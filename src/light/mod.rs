@@ -60,6 +60,7 @@ registry! {
 
 pub mod distant;
 pub mod patches;
+pub mod perez;
 
 /// A validated light source, world coordinates.
 pub trait Light: Debug + Send + Sync + Any {

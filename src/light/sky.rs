@@ -1,10 +1,12 @@
 //! Skies: `type = "sky"`, the 15 CIE standard general skies (ISO 15469:2004 / CIE S
 //! 011/E:2003), the CIE traditional overcast sky (Moon & Spencer, `cie_type = 16`) and
-//! the uniform sky, at a zenith luminance or a diffuse horizontal illuminance, with the
+//! the uniform sky, at a zenith luminance or a diffuse horizontal illuminance, and the
+//! Perez all-weather sky from an hour's irradiance (`perez.rs`), with the
 //! ground below the horizon as a Lambertian emitter of ρ·E_h/π (docs/daylight.md). The
 //! sky excludes the sun's disc: that is `type = "sun"`.
 
 use super::distant::{angle_range, hemisphere_bands, DistantEmitter, DistantTable, Portal, Region};
+use super::perez::{PerezInput, PerezSky, DEFAULT_DEW_POINT_C};
 use super::sun::{ground_reflectance, SunPositionFile};
 use super::{single, BoundingSphere, Emitter, Labelled, Light, LightFile, LoadContext};
 use crate::error::{Error, Result};
@@ -40,6 +42,8 @@ pub enum SkyModel {
     Cie { kind: u8, sun: DVec3 },
     /// CIE traditional overcast: (1 + 2 sin γ)/3.
     TraditionalOvercast,
+    /// The Perez all-weather sky (`light::perez`).
+    Perez(PerezSky),
     Uniform,
 }
 
@@ -77,6 +81,7 @@ impl SkyModel {
                 Self::indicatrix(c, d, e, chi) * Self::gradation(a, b, w.z)
             }
             SkyModel::TraditionalOvercast => (1.0 + 2.0 * w.z) / 3.0,
+            SkyModel::Perez(p) => p.relative(w),
             SkyModel::Uniform => 1.0,
         }
     }
@@ -90,6 +95,7 @@ impl SkyModel {
                 let zs = libm::acos(sun.z.clamp(-1.0, 1.0));
                 Self::indicatrix(c, d, e, zs) * Self::gradation(a, b, 1.0)
             }
+            SkyModel::Perez(p) => p.relative(DVec3::Z),
             _ => 1.0,
         }
     }
@@ -112,6 +118,7 @@ impl SkyModel {
                 let f = 1.0 + c * (libm::exp(d * lo) - libm::exp(d * FRAC_PI_2)) + e * cos2;
                 f * g / self.zenith_value()
             }
+            SkyModel::Perez(p) => p.bound(z, angle_range(band, p.sun)) / self.zenith_value(),
             SkyModel::TraditionalOvercast => (1.0 + 2.0 * z[1]) / 3.0,
             SkyModel::Uniform => 1.0,
         }
@@ -162,7 +169,7 @@ impl SkyModel {
 pub struct SkyFile {
     /// 1–15: the CIE standard general skies; 16: the CIE traditional overcast sky.
     pub cie_type: Option<i64>,
-    /// `"uniform"` instead of a CIE type.
+    /// `"uniform"` or `"perez"` instead of a CIE type.
     pub model: Option<String>,
     pub zenith_luminance_cdm2: Option<f64>,
     /// The sky's illuminance on an unobstructed horizontal plane (the diffuse
@@ -176,9 +183,74 @@ pub struct SkyFile {
     pub timezone_h: Option<f64>,
     pub date: Option<String>,
     pub time: Option<String>,
+    /// `model = "perez"`: direct normal irradiance, W/m².
+    pub direct_normal_irradiance_wm2: Option<f64>,
+    /// `model = "perez"`: diffuse horizontal irradiance, W/m².
+    pub diffuse_horizontal_irradiance_wm2: Option<f64>,
+    /// `model = "perez"`: 1–366, for the extraterrestrial irradiance; derived from
+    /// `date` when the sun is placed by site and time, required otherwise.
+    pub day_of_year: Option<f64>,
+    /// `model = "perez"`: dew point, °C, for the efficacies' precipitable water
+    /// (default [`DEFAULT_DEW_POINT_C`]).
+    pub dew_point_c: Option<f64>,
 }
 
 impl SkyFile {
+    /// The Perez sky of the entry's irradiance, day and dew point with the sun at `sun`.
+    fn perez(&self, at: &str, sun: Option<DVec3>) -> Result<SkyModel> {
+        let what = "model = \"perez\"";
+        let sun = sun.ok_or_else(|| {
+            Error::input(at, "a Perez sky needs the sun's position (altitude/azimuth or site, date and time)")
+        })?;
+        let dni = crate::input::required(self.direct_normal_irradiance_wm2, at, "direct_normal_irradiance_wm2", what)?;
+        let dhi = crate::input::required(
+            self.diffuse_horizontal_irradiance_wm2,
+            at,
+            "diffuse_horizontal_irradiance_wm2",
+            what,
+        )?;
+        let day = match (self.day_of_year, self.date.as_deref()) {
+            (Some(_), Some(_)) => {
+                return Err(Error::input(
+                    format!("{at}.day_of_year"),
+                    "give `day_of_year` or `date`, not both (the date fixes the day)",
+                ))
+            }
+            (Some(day), None) => day,
+            (None, Some(date)) => super::perez::day_of_year(date).ok_or_else(|| {
+                Error::input(format!("{at}.date"), format!("`{date}` is not YYYY-MM-DD"))
+            })?,
+            (None, None) => {
+                return Err(Error::input(
+                    format!("{at}.day_of_year"),
+                    "missing (required for a Perez sky whose sun is given by angles: the \
+                     extraterrestrial irradiance varies ±3.3 % over the year)",
+                ))
+            }
+        };
+        let input = PerezInput {
+            direct_normal_wm2: dni,
+            diffuse_horizontal_wm2: dhi,
+            sun,
+            day_of_year: day,
+            dew_point_c: self.dew_point_c.unwrap_or(DEFAULT_DEW_POINT_C),
+        };
+        PerezSky::new(&input).map(SkyModel::Perez).map_err(|e| Error::input(at, e))
+    }
+
+    /// The Perez-only keys this entry gives.
+    fn perez_keys(&self) -> Vec<&'static str> {
+        [
+            ("direct_normal_irradiance_wm2", self.direct_normal_irradiance_wm2.is_some()),
+            ("diffuse_horizontal_irradiance_wm2", self.diffuse_horizontal_irradiance_wm2.is_some()),
+            ("day_of_year", self.day_of_year.is_some()),
+            ("dew_point_c", self.dew_point_c.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(k, given)| given.then_some(k))
+        .collect()
+    }
+
     fn model(&self, at: &str) -> Result<SkyModel> {
         let position = SunPositionFile {
             sun_altitude_deg: self.sun_altitude_deg,
@@ -190,6 +262,10 @@ impl SkyFile {
             time: self.time.clone(),
         };
         let sun = position.resolve(at)?;
+        let perez = self.model.as_deref() == Some("perez");
+        if let (false, Some(key)) = (perez, self.perez_keys().first()) {
+            return Err(Error::input(format!("{at}.{key}"), "applies only to model = \"perez\""));
+        }
         let model = match (self.cie_type, self.model.as_deref()) {
             (Some(16), None) => SkyModel::TraditionalOvercast,
             (Some(k @ 1..=15), None) => {
@@ -223,16 +299,17 @@ impl SkyFile {
                 ))
             }
             (None, Some("uniform")) => SkyModel::Uniform,
+            (None, Some("perez")) => self.perez(at, sun)?,
             (None, Some(other)) => {
                 return Err(Error::input(
                     format!("{at}.model"),
-                    format!("unknown sky model `{other}` (expected \"uniform\", or a cie_type)"),
+                    format!("unknown sky model `{other}` (expected \"uniform\" or \"perez\", or a cie_type)"),
                 ))
             }
             _ => {
                 return Err(Error::input(
                     at,
-                    "give exactly one of `cie_type` (1–16) and `model = \"uniform\"`",
+                    "give exactly one of `cie_type` (1–16) and `model` (\"uniform\" or \"perez\")",
                 ))
             }
         };
@@ -246,9 +323,19 @@ impl LightFile for SkyFile {
     fn into_lights(self, label: &str, at: &str, cx: &mut LoadContext) -> Result<Vec<Labelled>> {
         let model = self.model(at)?;
         let (solid_per_lz, per_lz) = model.integrals();
-        let zenith_luminance_cdm2 = match (self.zenith_luminance_cdm2, self.horizontal_illuminance_lx) {
-            (Some(lz), None) => amount(lz, at, "zenith_luminance_cdm2")?,
-            (None, Some(e)) => amount(e, at, "horizontal_illuminance_lx")? / per_lz,
+        let level = (self.zenith_luminance_cdm2, self.horizontal_illuminance_lx);
+        let zenith_luminance_cdm2 = match (level, model) {
+            // Lz = E_dh / ∫(L/Lz) cos Z dω: the exact integral, not 145 patches.
+            ((None, None), SkyModel::Perez(p)) => p.diffuse_horizontal_lx / per_lz,
+            (_, SkyModel::Perez(_)) => {
+                return Err(Error::input(
+                    at,
+                    "a Perez sky's level comes from its irradiance (the efficacy model): give \
+                     neither `zenith_luminance_cdm2` nor `horizontal_illuminance_lx`",
+                ))
+            }
+            ((Some(lz), None), _) => amount(lz, at, "zenith_luminance_cdm2")?,
+            ((None, Some(e)), _) => amount(e, at, "horizontal_illuminance_lx")? / per_lz,
             _ => {
                 return Err(Error::input(
                     at,
@@ -335,6 +422,24 @@ impl Sky {
                 text += &format!(", next to the sun {:.2} cd/m²", self.luminance(sun));
             }
         }
+        if let SkyModel::Perez(p) = self.model {
+            text += &format!(
+                ", next to the sun {:.2} cd/m²; Perez ε {:.4}, Δ {:.4}, category {}, a b c d e \
+                 {:.4} {:.4} {:.4} {:.4} {:.4}; the sun's direct normal illuminance {:.1} lx \
+                 (a `type = \"sun\"` with `direct_normal_lx = {:.1}` and the same position)",
+                self.luminance(p.sun),
+                p.clearness,
+                p.brightness,
+                p.category,
+                p.coefficients[0],
+                p.coefficients[1],
+                p.coefficients[2],
+                p.coefficients[3],
+                p.coefficients[4],
+                p.direct_normal_lx,
+                p.direct_normal_lx,
+            );
+        }
         text
     }
 }
@@ -364,6 +469,13 @@ impl Light for Sky {
                 libm::atan2(sun.x, sun.y).to_degrees().rem_euclid(360.0)
             ),
             SkyModel::TraditionalOvercast => "CIE traditional overcast sky (type 16)".into(),
+            SkyModel::Perez(p) => format!(
+                "Perez all-weather sky (ε {:.4}, Δ {:.4}), sun at altitude {:.3}°, azimuth {:.3}°",
+                p.clearness,
+                p.brightness,
+                libm::asin(p.sun.z).to_degrees(),
+                libm::atan2(p.sun.x, p.sun.y).to_degrees().rem_euclid(360.0)
+            ),
             SkyModel::Uniform => "uniform sky".into(),
         };
         format!(
@@ -380,6 +492,7 @@ impl Light for Sky {
     fn daylight(&self, w: DVec3) -> Option<super::Daylight> {
         let sun = match self.model {
             SkyModel::Cie { kind, sun } if CIE_SKIES[kind as usize - 1][2] != 0.0 => Some(sun),
+            SkyModel::Perez(p) => Some(p.sun),
             _ => None,
         };
         Some(super::Daylight {

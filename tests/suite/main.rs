@@ -31,6 +31,7 @@ mod physics {
     mod glossy;
     mod luminaires;
     mod openings;
+    mod perez;
     mod physics;
     mod points;
     mod render;

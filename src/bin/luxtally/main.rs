@@ -63,6 +63,9 @@ enum Command {
         #[arg(long, value_name = "FILE", requires = "patches")]
         vector: Option<PathBuf>,
     },
+    /// Read an EPW weather file and print its site, hours, missing hours and annual
+    /// radiation sums (not yet used by runs).
+    Weather { file: PathBuf },
     /// List the EN 12464-1 task types a requirement's `task` can name, with their values.
     Tasks,
     /// Ray throughput of every backend and ray API on a scene (incoherent random rays),
@@ -97,6 +100,9 @@ fn main() -> ExitCode {
             patches,
             vector,
         } => sky_command(&scene, patches, vector.as_deref()),
+        Command::Weather { file } => {
+            luxtally::weather::read_epw(&file).map(|w| print!("{}", w.summary()))
+        }
         Command::Tasks => {
             print!("{}", luxtally::scene::tasks::table_text());
             Ok(())

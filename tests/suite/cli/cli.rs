@@ -399,3 +399,65 @@ fn sky_describes_the_daylight_sources() {
         assert!(text.contains(needle), "`{needle}` not in: {text}");
     }
 }
+
+/// `luxtally sky` on a Perez sky prints ε, Δ and the direct normal illuminance its sun
+/// should get; `luxtally weather` prints an EPW file's summary, and refuses a truncated
+/// one in one line.
+#[test]
+fn perez_sky_and_weather_commands_print_their_summaries() {
+    let dir = temp_dir("perez-weather");
+    let scene = dir.join("perez.toml");
+    std::fs::write(
+        &scene,
+        "[[lights]]\ntype = \"sky\"\nmodel = \"perez\"\ndirect_normal_irradiance_wm2 = 700\n\
+         diffuse_horizontal_irradiance_wm2 = 100\nsun_altitude_deg = 60\nsun_azimuth_deg = 180\nday_of_year = 172\n\
+         [[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\ncells = [1, 1]\n",
+    )
+    .unwrap();
+    let out = luxtally(&["sky", scene.to_str().unwrap()]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    // By hand (tests/suite/physics/perez.rs): E_dh 13318.7 lx, E_dn 72426.9 lx.
+    for needle in [
+        "Perez all-weather sky",
+        "category 8",
+        "13318.7 lx",
+        "direct_normal_lx = 72426.9",
+    ] {
+        assert!(text.contains(needle), "`{needle}` not in: {text}");
+    }
+    let mut epw = String::from(
+        "LOCATION,Berlin,BE,DEU,test,103840,52.47,13.40,1.0,49.0\nDESIGN CONDITIONS,0\n\
+         TYPICAL/EXTREME PERIODS,0\nGROUND TEMPERATURES,0\nHOLIDAYS/DAYLIGHT SAVINGS,No,0,0,0\n\
+         COMMENTS 1,x\nCOMMENTS 2,x\nDATA PERIODS,1,1,Data,Sunday, 1/ 1, 1/ 1\n",
+    );
+    for h in 1..=24 {
+        epw += &format!(
+            "2026,1,1,{h},60,flags,2,-1,80,101325,0,0,300,100,200,50,10000,20000,5000,9999,180,3,5,5,20,77777,9,999999999,10,0.1,0,88,0.2,0,0\n"
+        );
+    }
+    let file = dir.join("b.epw");
+    std::fs::write(&file, &epw).unwrap();
+    let out = luxtally(&["weather", file.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    for needle in [
+        "Berlin: latitude 52.47°",
+        "24 hourly records",
+        "0 missing",
+        "direct normal 4.8",
+    ] {
+        assert!(text.contains(needle), "`{needle}` not in: {text}");
+    }
+    let cut: String = epw.lines().take(20).map(|l| format!("{l}\n")).collect();
+    std::fs::write(&file, cut).unwrap();
+    let out = luxtally(&["weather", file.to_str().unwrap()]);
+    assert_fails_with(
+        &out,
+        &["b.epw", "12 hourly records", "makes 24", "truncated"],
+    );
+}

@@ -297,7 +297,7 @@ fn bad_skies_and_suns_are_rejected_in_one_line() {
         (sky("cie_type = 0\nzenith_luminance_cdm2 = 1"), "cie_type"),
         (sky("cie_type = 12\nzenith_luminance_cdm2 = 1"), "needs the sun's position"),
         (sky("cie_type = 12\nsun_altitude_deg = -5\nsun_azimuth_deg = 0\nzenith_luminance_cdm2 = 1"), "below the horizon"),
-        (sky("model = \"perez\"\nzenith_luminance_cdm2 = 1"), "unknown sky model"),
+        (sky("model = \"gendaylit\"\nzenith_luminance_cdm2 = 1"), "unknown sky model"),
         (sky("model = \"uniform\""), "exactly one of `zenith_luminance_cdm2`"),
         (sky("model = \"uniform\"\nzenith_luminance_cdm2 = 1\nground_reflectance = 1.5"), "ground_reflectance"),
         (sun("direct_normal_lx = 1000\nsun_altitude_deg = -1\nsun_azimuth_deg = 0"), "below the horizon"),
