@@ -289,11 +289,6 @@ impl PerezSky {
             diffuse_horizontal_lx: diffuse_efficacy(cat, water, z, efficacy_delta) * dhi,
             direct_normal_lx: direct_efficacy(cat, water, z, efficacy_delta) * dni,
         };
-        if !(sky.relative(DVec3::Z) > 0.0) {
-            return Err(format!(
-                "ε {eps:.4}, Δ {delta:.4}: the Perez luminance is not positive at the zenith"
-            ));
-        }
         Ok(sky)
     }
 

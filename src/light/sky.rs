@@ -87,7 +87,9 @@ impl SkyModel {
     }
 
     /// [`SkyModel::unscaled`] at the zenith: f(Zs)·φ(0) for a CIE sky (the zenith sits
-    /// at χ = Zs), 1 for the others.
+    /// at χ = Zs), lv there for a Perez sky, 1 for the others. Some Perez hours give a
+    /// dark zenith (lv ≤ 0, cut to 0): their sky is scaled by lv itself (1), and their
+    /// "Lz" is the luminance per unit lv.
     fn zenith_value(&self) -> f64 {
         match *self {
             SkyModel::Cie { kind, sun } => {
@@ -95,7 +97,7 @@ impl SkyModel {
                 let zs = libm::acos(sun.z.clamp(-1.0, 1.0));
                 Self::indicatrix(c, d, e, zs) * Self::gradation(a, b, 1.0)
             }
-            SkyModel::Perez(p) => p.relative(DVec3::Z),
+            SkyModel::Perez(p) => Some(p.relative(DVec3::Z)).filter(|&l| l > 0.0).unwrap_or(1.0),
             _ => 1.0,
         }
     }
@@ -326,7 +328,16 @@ impl LightFile for SkyFile {
         let level = (self.zenith_luminance_cdm2, self.horizontal_illuminance_lx);
         let zenith_luminance_cdm2 = match (level, model) {
             // Lz = E_dh / ∫(L/Lz) cos Z dω: the exact integral, not 145 patches.
-            ((None, None), SkyModel::Perez(p)) => p.diffuse_horizontal_lx / per_lz,
+            ((None, None), SkyModel::Perez(p)) if per_lz > 0.0 => p.diffuse_horizontal_lx / per_lz,
+            ((None, None), SkyModel::Perez(p)) => {
+                return Err(Error::input(
+                    at,
+                    format!(
+                        "ε {:.4}, Δ {:.4}: the Perez luminance is 0 everywhere above the horizon",
+                        p.clearness, p.brightness
+                    ),
+                ))
+            }
             (_, SkyModel::Perez(_)) => {
                 return Err(Error::input(
                     at,
@@ -361,6 +372,8 @@ impl LightFile for SkyFile {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sky {
     pub model: SkyModel,
+    /// Lz, the scale of [`SkyModel::relative`] (the zenith's luminance, but for a Perez
+    /// sky with a dark zenith: see [`SkyModel::zenith_value`]).
     pub zenith_luminance_cdm2: f64,
     /// Its illuminance on an unobstructed horizontal plane, lx.
     pub horizontal_lx: f64,
@@ -480,7 +493,7 @@ impl Light for Sky {
         };
         format!(
             "{model}: Lz {:.2} cd/m², horizontal illuminance {:.1} lx; ground ρ {} (L {:.2} cd/m²)",
-            self.zenith_luminance_cdm2,
+            self.luminance(DVec3::Z),
             self.horizontal_lx,
             self.ground_reflectance,
             self.ground_luminance_cdm2()

@@ -256,6 +256,28 @@ fn every_perez_sky_gives_its_diffuse_illuminance() {
     assert_calibrated(&z, "Perez skies' diffuse horizontal illuminance");
 }
 
+/// An hour whose Perez luminance is 0 at the zenith (category 6, a low Δ, the sun 70°
+/// high: the coefficients cut the zenith's lv to 0) is a sky like any other, scaled by
+/// lv itself: dark at the zenith, and next events on an open receiver give its E_dh.
+#[test]
+fn a_perez_sky_with_a_dark_zenith_still_gives_its_diffuse_illuminance() {
+    let p = perez(150.0, 60.0, 70.0, 180.0, 100.0).expect("a Perez sky");
+    assert!(
+        !(p.relative(glam::DVec3::Z) > 0.0),
+        "the zenith is dark: {p:?}"
+    );
+    let text = "[[lights]]\ntype = \"sky\"\nmodel = \"perez\"\ndirect_normal_irradiance_wm2 = 150\n\
+                diffuse_horizontal_irradiance_wm2 = 60\nsun_altitude_deg = 70\nsun_azimuth_deg = 180\n\
+                day_of_year = 100\n[[receivers]]\nname = \"open\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\n\
+                v = [0, 1, 0]\ncells = [4, 4]\n";
+    let scene = scene(text);
+    let sky = scene.lights[0].get::<Sky>().expect("a sky");
+    assert_eq!(sky.luminance(glam::DVec3::Z), 0.0);
+    let s = run_with(&scene, 50_000, Estimator::NextEvent, 3);
+    let z = z_scores(&s.receivers["open"], |_, _| p.diffuse_horizontal_lx);
+    assert!(z.iter().all(|z| z.abs() < 4.0), "{z:?}");
+}
+
 /// Bad Perez entries, each refused in one line naming the entry and the key.
 #[test]
 fn bad_perez_skies_are_rejected_in_one_line() {
