@@ -165,10 +165,11 @@ def pair_noise(a, b):
 
 
 # --- luxtally --------------------------------------------------------------------
-def run_luxtally(bin_path, scene, target, threads, outdir):
+def run_luxtally(bin_path, scene, stop_args, threads, outdir):
+    """Runs `luxtally run SCENE STOP_ARGS…` on `threads`; its summary, wall time, command."""
     cmd = [
-        str(bin_path), "run", str(scene), "--target-error", str(target),
-        "--photons", "1000000000", "--threads", str(threads), "--quiet", "--out", str(outdir),
+        str(bin_path), "run", str(scene), *stop_args,
+        "--threads", str(threads), "--quiet", "--out", str(outdir),
     ]
     t0 = time.perf_counter()
     r = subprocess.run(cmd, capture_output=True, text=True)
@@ -279,10 +280,11 @@ def main():
             die("cargo build --release failed")
         lux_bin = tdir / "release" / "luxtally"
     lux_out = Path(tempfile.mkdtemp(prefix="luxtally-", dir=work))
-    s, lux_wall, lux_cmd = run_luxtally(lux_bin, REPO / "scenes" / "office.toml", a.target, a.procs, lux_out)
+    stop = ["--target-error", str(a.target), "--photons", "1000000000"]
+    s, lux_wall, lux_cmd = run_luxtally(lux_bin, REPO / "scenes" / "office.toml", stop, a.procs, lux_out)
     lux_times = [(s["elapsed_s"], s["setup_s"], lux_wall)]
     for _ in range(a.luxtally_repeats - 1):  # timing only; the first run's cells are compared
-        s2, w2, _ = run_luxtally(lux_bin, REPO / "scenes" / "office.toml", a.target, a.procs,
+        s2, w2, _ = run_luxtally(lux_bin, REPO / "scenes" / "office.toml", stop, a.procs,
                                  Path(tempfile.mkdtemp(prefix="luxtally-", dir=work)))
         lux_times.append((s2["elapsed_s"], s2["setup_s"], w2))
     log("luxtally runs (photon pass, setup, process): "

@@ -444,18 +444,10 @@ def time_to(search, target, key="noise"):
 
 
 # --- luxtally -------------------------------------------------------------------
-def run_luxtally(bin_path, scene, photons, threads, outdir, seed=None):
-    cmd = [str(bin_path), "run", str(scene), "--photons", str(photons), "--threads", str(threads),
-           "--estimator", "next_event", "--quiet", "--out", str(outdir)]
-    if seed is not None:
-        cmd += ["--seed", str(seed)]
-    t0 = time.perf_counter()
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    wall = time.perf_counter() - t0
-    if r.returncode != 0:
-        die(f"luxtally failed ({' '.join(cmd)}):\n{r.stdout}\n{r.stderr}")
-    s = json.loads((Path(outdir) / "summary.json").read_text())
-    return s, wall, cmd
+def run_luxtally(bin_path, scene, photons, threads, outdir):
+    """A next-event run of `photons` (compare.py's runner)."""
+    stop = ["--photons", str(photons), "--estimator", "next_event"]
+    return compare.run_luxtally(bin_path, scene, stop, threads, outdir)
 
 
 def main():

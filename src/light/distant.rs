@@ -206,6 +206,11 @@ impl Portal {
         }
     }
 
+    /// Its rectangle as seen from `p` (None from its plane).
+    fn seen_from(&self, p: DVec3) -> Option<SphericalRect> {
+        SphericalRect::new(p, self.corner, self.u, self.v)
+    }
+
     /// Whether the ray from `p` along unit `w` passes through it.
     fn passes(&self, p: DVec3, w: DVec3) -> bool {
         let n = self.u.cross(self.v);
@@ -255,9 +260,6 @@ impl DistantEmitter {
         area_pattern: &[(f64, f64)],
         each: &mut dyn FnMut(Incoming),
     ) {
-        let rects: Vec<Option<SphericalRect>> = (self.portals.iter())
-            .map(|o| SphericalRect::new(p, o.corner, o.u, o.v))
-            .collect();
         let q = SKY_TABLE_SHARE;
         let per_portal = (1.0 - q) / self.portals.len() as f64;
         let pieces = area_pattern.len().max(1) as f64;
@@ -271,14 +273,23 @@ impl DistantEmitter {
             } else {
                 let x = (a - q) / (1.0 - q) * self.portals.len() as f64;
                 let k = (x as usize).min(self.portals.len() - 1);
-                let Some(rect) = &rects[k] else { continue };
+                let Some(rect) = self.portals[k].seen_from(p) else {
+                    continue;
+                };
                 let point = rect.sample((x - k as f64).clamp(0.0, 1.0 - f64::EPSILON), b);
                 let w = (point - p).normalize();
                 // Aimed at portal k, w passes it even where rounding puts the point a
-                // hair outside an edge.
-                let density: f64 = (self.portals.iter().zip(&rects).enumerate())
-                    .filter(|(j, (o, _))| *j == k || o.passes(p, w))
-                    .filter_map(|(_, (_, r))| r.as_ref())
+                // hair outside an edge; the other portals count where w passes them.
+                let density: f64 = (self.portals.iter().enumerate())
+                    .filter_map(|(j, o)| {
+                        if j == k {
+                            Some(rect)
+                        } else if o.passes(p, w) {
+                            o.seen_from(p)
+                        } else {
+                            None
+                        }
+                    })
                     .map(|r| per_portal / r.solid_angle_sr)
                     .sum();
                 (w, density)

@@ -6,6 +6,7 @@
 //! and the numbering runs towards east. Indices here start at 0 with the first sky
 //! patch (Radiance's bin 1; its bin 0 is the ground).
 
+use super::sun::direction_rad;
 use crate::error::{Error, Result};
 use glam::DVec3;
 use std::f64::consts::{FRAC_PI_2, TAU};
@@ -48,22 +49,11 @@ impl Patch {
         if self.altitude[1] >= FRAC_PI_2 && self.azimuth[1] - self.azimuth[0] >= TAU {
             return DVec3::Z;
         }
-        direction(
+        direction_rad(
             0.5 * (self.altitude[0] + self.altitude[1]),
             0.5 * (self.azimuth[0] + self.azimuth[1]),
         )
     }
-}
-
-/// The unit direction at `altitude`, `azimuth` (radians; azimuth from north, +y,
-/// towards east, +x).
-fn direction(altitude: f64, azimuth: f64) -> DVec3 {
-    let c = libm::cos(altitude);
-    DVec3::new(
-        c * libm::sin(azimuth),
-        c * libm::cos(azimuth),
-        libm::sin(altitude),
-    )
 }
 
 impl SkyPatches {
@@ -172,7 +162,7 @@ impl SkyPatches {
             let altitude = libm::asin(s.min(1.0));
             for (y, wy) in GAUSS8 {
                 let azimuth = p.azimuth[0] + y * (p.azimuth[1] - p.azimuth[0]);
-                sum += wx * wy * luminance(direction(altitude, azimuth));
+                sum += wx * wy * luminance(direction_rad(altitude, azimuth));
             }
         }
         sum
@@ -288,9 +278,9 @@ mod tests {
             for k in 0..p.len() {
                 assert_eq!(p.index(p.patch(k).centre()), Some(k), "MF {mf} patch {k}");
             }
-            let north = direction(0.01, 0.0);
+            let north = direction_rad(0.01, 0.0);
             assert_eq!(p.index(north), Some(0));
-            let just_east = direction(0.01, (360.0 / (30 * mf) as f64).to_radians());
+            let just_east = direction_rad(0.01, (360.0 / (30 * mf) as f64).to_radians());
             assert_eq!(p.index(just_east), Some(1));
             assert_eq!(p.index(DVec3::new(0.0, 1.0, -0.1).normalize()), None);
         }

@@ -7,7 +7,7 @@
 
 use super::distant::{angle_range, hemisphere_bands, DistantEmitter, DistantTable, Portal, Region};
 use super::perez::{PerezInput, PerezSky, DEFAULT_DEW_POINT_C};
-use super::sun::{ground_reflectance, SunPositionFile};
+use super::sun::{altitude_azimuth_deg, ground_reflectance, SunPositionFile};
 use super::{single, BoundingSphere, Emitter, Labelled, Light, LightFile, LoadContext};
 use crate::error::{Error, Result};
 use crate::input::amount;
@@ -83,6 +83,16 @@ impl SkyModel {
             SkyModel::TraditionalOvercast => (1.0 + 2.0 * w.z) / 3.0,
             SkyModel::Perez(p) => p.relative(w),
             SkyModel::Uniform => 1.0,
+        }
+    }
+
+    /// The sun its luminance follows: a CIE type whose indicatrix depends on it (all but
+    /// 1, 3 and 5), or a Perez sky's.
+    pub fn sun(&self) -> Option<DVec3> {
+        match *self {
+            SkyModel::Cie { kind, sun } if CIE_SKIES[kind as usize - 1][2] != 0.0 => Some(sun),
+            SkyModel::Perez(p) => Some(p.sun),
+            _ => None,
         }
     }
 
@@ -430,17 +440,14 @@ impl Sky {
         let mut text = self.describe();
         let horizon = self.luminance(DVec3::new(0.0, 1.0, 1e-9).normalize());
         text += &format!("; L at the horizon (north) {horizon:.2} cd/m²");
-        if let SkyModel::Cie { kind, sun } = self.model {
-            if CIE_SKIES[kind as usize - 1][2] != 0.0 && sun.z > 0.0 {
-                text += &format!(", next to the sun {:.2} cd/m²", self.luminance(sun));
-            }
+        if let Some(sun) = self.model.sun().filter(|s| s.z > 0.0) {
+            text += &format!(", next to the sun {:.2} cd/m²", self.luminance(sun));
         }
         if let SkyModel::Perez(p) = self.model {
             text += &format!(
-                ", next to the sun {:.2} cd/m²; Perez ε {:.4}, Δ {:.4}, category {}, a b c d e \
+                "; Perez ε {:.4}, Δ {:.4}, category {}, a b c d e \
                  {:.4} {:.4} {:.4} {:.4} {:.4}; the sun's direct normal illuminance {:.1} lx \
                  (a `type = \"sun\"` with `direct_normal_lx = {:.1}` and the same position)",
-                self.luminance(p.sun),
                 p.clearness,
                 p.brightness,
                 p.category,
@@ -476,19 +483,22 @@ impl Light for Sky {
 
     fn describe(&self) -> String {
         let model = match self.model {
-            SkyModel::Cie { kind, sun } => format!(
-                "CIE standard general sky type {kind}, sun at altitude {:.3}°, azimuth {:.3}°",
-                libm::asin(sun.z).to_degrees(),
-                libm::atan2(sun.x, sun.y).to_degrees().rem_euclid(360.0)
-            ),
+            SkyModel::Cie { kind, sun } => {
+                let (altitude, azimuth) = altitude_azimuth_deg(sun);
+                format!(
+                    "CIE standard general sky type {kind}, sun at altitude {altitude:.3}°, \
+                     azimuth {azimuth:.3}°"
+                )
+            }
             SkyModel::TraditionalOvercast => "CIE traditional overcast sky (type 16)".into(),
-            SkyModel::Perez(p) => format!(
-                "Perez all-weather sky (ε {:.4}, Δ {:.4}), sun at altitude {:.3}°, azimuth {:.3}°",
-                p.clearness,
-                p.brightness,
-                libm::asin(p.sun.z).to_degrees(),
-                libm::atan2(p.sun.x, p.sun.y).to_degrees().rem_euclid(360.0)
-            ),
+            SkyModel::Perez(p) => {
+                let (altitude, azimuth) = altitude_azimuth_deg(p.sun);
+                format!(
+                    "Perez all-weather sky (ε {:.4}, Δ {:.4}), sun at altitude {altitude:.3}°, \
+                     azimuth {azimuth:.3}°",
+                    p.clearness, p.brightness
+                )
+            }
             SkyModel::Uniform => "uniform sky".into(),
         };
         format!(
@@ -503,14 +513,9 @@ impl Light for Sky {
     /// Its luminance towards `w` ([`Sky::luminance`]), and its sun where its indicatrix
     /// follows one (types 1, 3 and 5 and the others have none that matters).
     fn daylight(&self, w: DVec3) -> Option<super::Daylight> {
-        let sun = match self.model {
-            SkyModel::Cie { kind, sun } if CIE_SKIES[kind as usize - 1][2] != 0.0 => Some(sun),
-            SkyModel::Perez(p) => Some(p.sun),
-            _ => None,
-        };
         Some(super::Daylight {
             sky_luminance_cdm2: Some(self.luminance(w)),
-            sun,
+            sun: self.model.sun(),
         })
     }
 }

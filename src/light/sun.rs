@@ -148,9 +148,21 @@ pub fn solar_position(lat: f64, lon: f64, tz_h: f64, date: [f64; 3], hms: [f64; 
 
 /// Unit vector towards altitude/azimuth (degrees; azimuth from +y towards +x).
 pub fn direction(altitude_deg: f64, azimuth_deg: f64) -> DVec3 {
-    let (alt, az) = (altitude_deg.to_radians(), azimuth_deg.to_radians());
-    let c = libm::cos(alt);
-    DVec3::new(c * libm::sin(az), c * libm::cos(az), libm::sin(alt))
+    direction_rad(altitude_deg.to_radians(), azimuth_deg.to_radians())
+}
+
+/// [`direction`] of an altitude and azimuth in radians.
+pub fn direction_rad(altitude: f64, azimuth: f64) -> DVec3 {
+    let c = libm::cos(altitude);
+    DVec3::new(c * libm::sin(azimuth), c * libm::cos(azimuth), libm::sin(altitude))
+}
+
+/// Altitude and azimuth (degrees, azimuth from north towards east) of unit `w`: the
+/// inverse of [`direction`].
+pub fn altitude_azimuth_deg(w: DVec3) -> (f64, f64) {
+    let altitude = libm::asin(w.z.clamp(-1.0, 1.0)).to_degrees();
+    let azimuth = libm::atan2(w.x, w.y).to_degrees().rem_euclid(360.0);
+    (altitude, azimuth)
 }
 
 /// The `[[lights]]` entry.
@@ -301,12 +313,10 @@ impl Light for Sun {
     }
 
     fn describe(&self) -> String {
-        let t = self.towards;
+        let (altitude, azimuth) = altitude_azimuth_deg(self.towards);
         format!(
-            "sun at altitude {:.3}°, azimuth {:.3}° (from north, +y, towards east, +x), \
-             {} lx normal, {:.1} lx horizontal; ground ρ {} (L {:.2} cd/m²)",
-            libm::asin(t.z).to_degrees(),
-            libm::atan2(t.x, t.y).to_degrees().rem_euclid(360.0),
+            "sun at altitude {altitude:.3}°, azimuth {azimuth:.3}° (from north, +y, towards \
+             east, +x), {} lx normal, {:.1} lx horizontal; ground ρ {} (L {:.2} cd/m²)",
             self.direct_normal_lx,
             self.horizontal_lx(),
             self.ground_reflectance,

@@ -10,6 +10,7 @@
 //! edge and row j from the top (north) edge; its centre sits at plot coordinates
 //! x = 2(i + ½)/size − 1 (towards west), y = 1 − 2(j + ½)/size (towards north).
 
+use crate::light::sun::altitude_azimuth_deg;
 use crate::light::{Daylight, Light};
 use crate::scene::Scene;
 use crate::stats::null_as_nan;
@@ -70,13 +71,6 @@ pub fn pixel_direction(size: usize, i: usize, j: usize) -> Option<DVec3> {
     };
     // East on the left: x grows towards west, −x.
     Some(DVec3::new(-x * s, y * s, libm::cos(theta)).normalize())
-}
-
-/// Altitude and azimuth (degrees, azimuth from north towards east) of unit `w`.
-fn altitude_azimuth_deg(w: DVec3) -> (f64, f64) {
-    let altitude = libm::asin(w.z.clamp(-1.0, 1.0)).to_degrees();
-    let azimuth = libm::atan2(w.x, w.y).to_degrees().rem_euclid(360.0);
-    (altitude, azimuth)
 }
 
 /// The plots of the scene's skies, in the order of its lights (empty without skies).

@@ -201,7 +201,8 @@ impl<'a> EyePass<'a> {
                 self.shade(k, depth < self.camera.max_depth, stream, s, &mut sample_l);
             }
             if !s.shadow.is_empty() {
-                (self.shadows).transmitted(&s.shadow, &mut s.through, &mut s.shadow_scratch);
+                self.shadows
+                    .transmitted(&s.shadow, &mut s.through, &mut s.shadow_scratch);
                 counts.shadow += s.shadow.len() as u64;
                 for (&(sample, gain), &through) in s.shadow_gain.iter().zip(&s.through) {
                     if through > 0.0 {

@@ -131,13 +131,9 @@ fn sky_command(
 ) -> luxtally::Result<()> {
     use luxtally::light::{Sky, Sun};
     let scene = luxtally::scene::load(path)?;
-    let patches = match patches {
-        Some(mf) => Some(luxtally::light::patches::SkyPatches::reinhart(
-            mf,
-            "--patches",
-        )?),
-        None => None,
-    };
+    let patches = (patches
+        .map(|mf| luxtally::light::patches::SkyPatches::reinhart(mf, "--patches")))
+    .transpose()?;
     let mut csv = String::new();
     let mut any = false;
     for l in &scene.lights {

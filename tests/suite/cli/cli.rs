@@ -313,20 +313,28 @@ fn tasks_lists_the_task_types() {
     }
 }
 
+/// DIR/day.toml holding `lights` and a 1-cell receiver, for the `sky` command; DIR is
+/// a fresh temporary folder named `name`.
+fn sky_scene(name: &str, lights: &str) -> (std::path::PathBuf, std::path::PathBuf) {
+    let dir = temp_dir(name);
+    let scene = dir.join("day.toml");
+    let receiver =
+        "[[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\n\
+                    cells = [1, 1]\n";
+    std::fs::write(&scene, format!("{lights}{receiver}")).unwrap();
+    (dir, scene)
+}
+
 /// `luxtally sky --patches MF --vector FILE`: the sky vector of Reinhart MF:2 (577
 /// patches) as CSV, whose patch means reproduce the sky's exact horizontal
 /// illuminance to the patch-uniform discretisation (Σ L̄·∫cos dω within 0.2 % for the
 /// overcast sky; the solid angles sum to 2π); a bad MF is one line.
 #[test]
 fn sky_writes_a_reinhart_sky_vector() {
-    let dir = temp_dir("sky-vector");
-    let scene = dir.join("day.toml");
-    std::fs::write(
-        &scene,
-        "[[lights]]\ntype = \"sky\"\ncie_type = 16\nhorizontal_illuminance_lx = 7000\n\
-         [[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\ncells = [1, 1]\n",
-    )
-    .unwrap();
+    let (dir, scene) = sky_scene(
+        "sky-vector",
+        "[[lights]]\ntype = \"sky\"\ncie_type = 16\nhorizontal_illuminance_lx = 7000\n",
+    );
     let csv = dir.join("vector.csv");
     let s = scene.to_str().unwrap();
     let out = luxtally(&[
@@ -376,15 +384,11 @@ fn sky_writes_a_reinhart_sky_vector() {
 /// the sun's position.
 #[test]
 fn sky_describes_the_daylight_sources() {
-    let dir = temp_dir("sky-command");
-    let scene = dir.join("day.toml");
-    std::fs::write(
-        &scene,
+    let (_, scene) = sky_scene(
+        "sky-command",
         "[[lights]]\ntype = \"sky\"\ncie_type = 16\nhorizontal_illuminance_lx = 7000\n\
-         [[lights]]\ntype = \"sun\"\ndirect_normal_lx = 50000\nsun_altitude_deg = 40\nsun_azimuth_deg = 135\n\
-         [[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\ncells = [1, 1]\n",
-    )
-    .unwrap();
+         [[lights]]\ntype = \"sun\"\ndirect_normal_lx = 50000\nsun_altitude_deg = 40\nsun_azimuth_deg = 135\n",
+    );
     let out = luxtally(&["sky", scene.to_str().unwrap()]);
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
@@ -405,15 +409,11 @@ fn sky_describes_the_daylight_sources() {
 /// one in one line.
 #[test]
 fn perez_sky_and_weather_commands_print_their_summaries() {
-    let dir = temp_dir("perez-weather");
-    let scene = dir.join("perez.toml");
-    std::fs::write(
-        &scene,
+    let (dir, scene) = sky_scene(
+        "perez-weather",
         "[[lights]]\ntype = \"sky\"\nmodel = \"perez\"\ndirect_normal_irradiance_wm2 = 700\n\
-         diffuse_horizontal_irradiance_wm2 = 100\nsun_altitude_deg = 60\nsun_azimuth_deg = 180\nday_of_year = 172\n\
-         [[receivers]]\nname = \"r\"\ncorner = [0, 0, 0]\nu = [1, 0, 0]\nv = [0, 1, 0]\ncells = [1, 1]\n",
-    )
-    .unwrap();
+         diffuse_horizontal_irradiance_wm2 = 100\nsun_altitude_deg = 60\nsun_azimuth_deg = 180\nday_of_year = 172\n",
+    );
     let out = luxtally(&["sky", scene.to_str().unwrap()]);
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
