@@ -40,6 +40,8 @@ pub struct PhotonStreams {
     key: u64,
     /// Index of the batch's first photon.
     pub first: u64,
+    /// Set apart from the photons' the increments of other streams of a photon index.
+    tag: u64,
 }
 
 impl PhotonStreams {
@@ -47,6 +49,18 @@ impl PhotonStreams {
         PhotonStreams {
             key: mix64(seed ^ 0x5851_f42d_4c95_7f2d),
             first,
+            tag: 0,
+        }
+    }
+
+    /// The streams of the portal photons of photon indices `first`, `first + 1`, …:
+    /// their own keys and increments (bit 62 set: no photon index reaches it), so
+    /// independent of every photon's.
+    pub fn portal(seed: u64, first: u64) -> Self {
+        PhotonStreams {
+            key: mix64(seed ^ 0x3c6e_f372_fe94_f82b),
+            first,
+            tag: 1 << 62,
         }
     }
 
@@ -55,7 +69,7 @@ impl PhotonStreams {
     pub fn get(&self, k: usize) -> Pcg32 {
         let index = self.first + k as u64;
         let state = mix64(self.key.wrapping_add(index.wrapping_mul(GOLDEN_GAMMA)));
-        Pcg32::new(state, index)
+        Pcg32::new(state, index ^ self.tag)
     }
 }
 

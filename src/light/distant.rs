@@ -213,10 +213,15 @@ impl Portal {
 
     /// Whether the ray from `p` along unit `w` passes through it.
     fn passes(&self, p: DVec3, w: DVec3) -> bool {
+        self.crossing(p, w).is_some_and(|t| t > 0.0)
+    }
+
+    /// Where the line `p + t·w` (unit `w`) crosses the rectangle: its t, of either sign.
+    pub fn crossing(&self, p: DVec3, w: DVec3) -> Option<f64> {
         let n = self.u.cross(self.v);
         let along = w.dot(n);
         if along == 0.0 {
-            return false;
+            return None;
         }
         let t = (self.corner - p).dot(n) / along;
         let q = p + w * t - self.corner;
@@ -224,8 +229,21 @@ impl Portal {
             q.dot(self.u) / self.u.length_squared(),
             q.dot(self.v) / self.v.length_squared(),
         );
-        t > 0.0 && (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&r)
+        ((0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&r)).then_some(t)
     }
+
+    pub fn area_m2(&self) -> f64 {
+        self.u.cross(self.v).length()
+    }
+}
+
+/// A photon aimed through an opening ([`DistantEmitter::portal_photon`]): a point of a
+/// portal, the photon's unit direction there, and its flux relative to a disk photon's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PortalPhoton {
+    pub point: DVec3,
+    pub dir: DVec3,
+    pub weight: f64,
 }
 
 /// With portals, the share of next-event pieces drawn from the whole sky's table (the
@@ -241,8 +259,11 @@ pub struct DistantEmitter {
     /// Centre (local frame) and radius of the scene's bounding sphere.
     pub center: DVec3,
     pub radius: f64,
-    /// Openings (local frame) next events also aim at.
+    /// The scene's openings (local frame): photons also come in by them.
     pub portals: Vec<Portal>,
+    /// Whether next events aim at the portals too (a sky's do; a sun's cone is sampled
+    /// directly, which aiming at a window would only make noisier).
+    pub next_events_by_portals: bool,
 }
 
 impl DistantEmitter {
@@ -317,7 +338,7 @@ impl Emitter for DistantEmitter {
         if self.table.is_dark() {
             return;
         }
-        if !self.portals.is_empty() {
+        if self.next_events_by_portals && !self.portals.is_empty() {
             return self.incoming_through_portals(p, area_pattern, each);
         }
         let pieces = area_pattern.len().max(1) as f64;
@@ -331,6 +352,57 @@ impl Emitter for DistantEmitter {
                 });
             }
         }
+    }
+
+    fn portals(&self) -> &[Portal] {
+        &self.portals
+    }
+
+    /// A photon through the portals (docs/daylight.md, *Openings*): a portal picked by
+    /// area, a point uniformly on it, a direction drawn in proportion to L as a disk
+    /// photon's. Of the lines a disk photon follows, those through that point: the
+    /// density of such a line's point on the disk is 1/(A·|cos θ|) against the disk's
+    /// 1/(πR²), so it carries A·|cos θ|/(πR²) of a disk photon's flux, A the portals'
+    /// total area and θ from the portal's normal. None where no disk photon follows the
+    /// line (it would miss the disk) or where it crosses another portal first on its
+    /// way in (that portal's photons carry it, so no line is counted twice).
+    fn portal_photon(&self, rng: &mut Pcg32) -> Option<PortalPhoton> {
+        let total: f64 = self.portals.iter().map(Portal::area_m2).sum();
+        if !(total > 0.0) || self.table.is_dark() {
+            return None;
+        }
+        let mut x = uniform(rng) * total;
+        let k = (self.portals.iter())
+            .position(|o| {
+                x -= o.area_m2();
+                x < 0.0
+            })
+            .unwrap_or(self.portals.len() - 1);
+        let portal = &self.portals[k];
+        let point = portal.corner + portal.u * uniform(rng) + portal.v * uniform(rng);
+        let w = self.table.sample(rng);
+        let disk_center = self.center + w * (self.radius * 1.01);
+        let to_disk = (disk_center - point).dot(w);
+        let on_disk = point + w * to_disk;
+        if (on_disk - disk_center).length_squared() > self.radius * self.radius {
+            return None;
+        }
+        // Coplanar portals tie: the one listed first takes the line.
+        let tie = 1e-9 * self.radius;
+        let crossed_first = (self.portals.iter().enumerate()).any(|(j, o)| {
+            j != k
+                && o.crossing(point, w)
+                    .is_some_and(|t| t < to_disk && (t > tie || (t.abs() <= tie && j < k)))
+        });
+        if crossed_first {
+            return None;
+        }
+        let cos = w.dot(portal.u.cross(portal.v)).abs() / portal.area_m2();
+        Some(PortalPhoton {
+            point,
+            dir: -w,
+            weight: total * cos / (PI * self.radius * self.radius),
+        })
     }
 
     /// The whole sky: a pattern of the camera's largest size.

@@ -171,6 +171,18 @@ pub trait Emitter: Debug + Send + Sync {
     fn luminance_seen(&self, _o: DVec3, _dir: DVec3, _t_hit: f64) -> Option<f64> {
         None
     }
+
+    /// The openings (`[[portals]]`, local frame) its photons also come in by: a distant
+    /// source's. Its photons whose first segment crosses one leave the receivers to
+    /// its [`Emitter::portal_photon`]s (`crate::trace`, docs/daylight.md *Openings*).
+    fn portals(&self) -> &[distant::Portal] {
+        &[]
+    }
+
+    /// A photon of this source through its portals, drawn from `rng`, or None.
+    fn portal_photon(&self, _rng: &mut Pcg32) -> Option<distant::PortalPhoton> {
+        None
+    }
 }
 
 /// A `[[lights]]` entry of one `type`: its keys (serde, `deny_unknown_fields`) and their

@@ -390,7 +390,7 @@ pub struct Sky {
     /// ∫ L dω over the upper hemisphere, cd/m²·sr.
     pub radiant_integral: f64,
     pub ground_reflectance: f64,
-    /// The scene's `[[portals]]`: next events aim at them too.
+    /// The scene's `[[portals]]`: photons come in by them, next events aim at them too.
     pub portals: Vec<Portal>,
 }
 
@@ -478,6 +478,7 @@ impl Light for Sky {
             center: sphere.center - origin,
             radius: sphere.radius,
             portals: self.portals.iter().map(|o| o.shifted(-origin)).collect(),
+            next_events_by_portals: true,
         })
     }
 

@@ -3,7 +3,7 @@
 //! and local time (NREL SPA, Reda & Andreas 2004, through the `solar-positioning`
 //! crate), and the ground it lights (docs/daylight.md).
 
-use super::distant::{DistantEmitter, DistantTable, Region};
+use super::distant::{DistantEmitter, DistantTable, Portal, Region};
 use super::{single, BoundingSphere, Emitter, Labelled, Light, LightFile, LoadContext};
 use crate::error::{Error, Result};
 use crate::input::{amount, required};
@@ -195,7 +195,7 @@ pub fn ground_reflectance(x: Option<f64>, at: &str) -> Result<f64> {
 impl LightFile for SunFile {
     const TYPE: &'static str = "sun";
 
-    fn into_lights(self, label: &str, at: &str, _: &mut LoadContext) -> Result<Vec<Labelled>> {
+    fn into_lights(self, label: &str, at: &str, cx: &mut LoadContext) -> Result<Vec<Labelled>> {
         let what = "type \"sun\" lights";
         let e = required(self.direct_normal_lx, at, "direct_normal_lx", what)?;
         let direct_normal_lx = amount(e, at, "direct_normal_lx")?;
@@ -230,6 +230,7 @@ impl LightFile for SunFile {
                 towards,
                 direct_normal_lx,
                 ground_reflectance: ground_reflectance(self.ground_reflectance, at)?,
+                portals: cx.portals.clone(),
             },
         )
     }
@@ -242,6 +243,9 @@ pub struct Sun {
     pub towards: DVec3,
     pub direct_normal_lx: f64,
     pub ground_reflectance: f64,
+    /// The scene's `[[portals]]`: photons come in by them (next events do not aim at
+    /// them: the sun's cone is sampled directly).
+    pub portals: Vec<Portal>,
 }
 
 impl Sun {
@@ -303,12 +307,12 @@ impl Light for Sun {
     }
 
     fn emitter(&self, origin: DVec3, sphere: &BoundingSphere) -> Arc<dyn Emitter> {
-        // The sun's cone is sampled directly: portals would not help it.
         Arc::new(DistantEmitter {
             table: self.table(),
             center: sphere.center - origin,
             radius: sphere.radius,
-            portals: Vec::new(),
+            portals: self.portals.iter().map(|o| o.shifted(-origin)).collect(),
+            next_events_by_portals: false,
         })
     }
 

@@ -3,6 +3,7 @@
 //! survivors in place, and the per-worker scratch buffers all passes share.
 
 use crate::accel::{HitBatch, RayBatch};
+use crate::light::distant::PortalPhoton;
 use crate::surface::LobeKind;
 use crate::tally::CellPartial;
 use glam::Vec3;
@@ -34,6 +35,11 @@ pub struct Scratch {
     pub(super) marks: Vec<bool>,
     /// Per survivor, the normal of the side it leaves its surface on.
     pub(super) side: [Vec<f32>; 3],
+    /// Per photon offset, the weight of its receiver scores in this pass; empty: 1.
+    pub(super) weight: Vec<f64>,
+    /// The chunk's portal photons before their sky is checked: photon offset, the
+    /// photon and its stream.
+    pub(super) portal_photons: Vec<(u32, PortalPhoton, Pcg32)>,
 }
 
 impl Scratch {
@@ -51,6 +57,16 @@ impl Scratch {
             }
         }
     }
+}
+
+/// Which photons a batch holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Pass {
+    /// The lights' own photons: they deposit on the triangles (the scene map) and are
+    /// the histories counted by bounce; they score receivers with their weights.
+    Map,
+    /// Portal photons: they score receivers only.
+    Portal,
 }
 
 /// Where a photon's current segment started.

@@ -3,7 +3,7 @@
 //! triangle, is connected to next-event receivers, and goes to the kernel of its
 //! surface class ([`Surfacing`]), which plays the roulette and compacts the survivors.
 
-use super::batch::{Lanes, Scratch, Segment, SurvivorLanes};
+use super::batch::{Lanes, Pass, Scratch, Segment, SurvivorLanes};
 use super::scatter::scatter;
 use super::Tracer;
 use crate::accel::{RayBatch, Surface};
@@ -267,12 +267,14 @@ impl Tracer<'_> {
         tally: &mut ChunkTally,
         flux: f64,
         odd_first: bool,
+        pass: Pass,
     ) -> (usize, usize) {
         let (n, hits, rays) = (s.rays.len(), &s.hits, &mut s.rays);
         // Every live photon has hit as often: the first hit is direct light, and so is
         // a later one of an emitted segment (passed on straight by glazing).
         let hit_bounces = s.lanes.bounces;
         let capped = hit_bounces >= self.max_bounces;
+        let map = pass == Pass::Map;
         let first_deposit = tally.deposits.len();
         tally.deposits.resize(first_deposit + n, 0);
         let mut out = HitsOut::new(
@@ -311,22 +313,23 @@ impl Tracer<'_> {
             } else {
                 out.survivors.segment[k] != Segment::Emitted
             };
-            out.deposit(deposit_code(tri, back_face, indirect, odd), has_map);
+            out.deposit(deposit_code(tri, back_face, indirect, odd), has_map && map);
             let surfacing = &self.surfacings[surface.material as usize];
-            if !LAMBERT_TRACK && self.any_connects && surfacing.connectable {
+            let weight = super::receiver_weight(&s.weight, offset);
+            if !LAMBERT_TRACK && self.any_connects && surfacing.connectable && weight > 0.0 {
                 self.connect(
                     surface.point,
                     normal,
                     -dir,
                     surfacing,
                     (offset, &mut out.survivors.rng[k]),
-                    flux,
+                    flux * weight,
                     &mut s.shadow_rays,
                     &mut s.shadow_scores,
                 );
             }
             if capped {
-                tally.killed_by_bounce_cap += 1;
+                tally.killed_by_bounce_cap += map as u64;
                 out.cursors.ended += 1;
                 continue;
             }
@@ -350,8 +353,10 @@ impl Tracer<'_> {
         let c = out.cursors;
         let (survivors, diffuse, ended) = c.totals(n, LAMBERT_TRACK && !capped);
         tally.deposits.truncate(first_deposit + c.deposits);
-        tally.record_histories(hit_bounces, c.escaped);
-        tally.record_histories(hit_bounces + 1, ended);
+        if map {
+            tally.record_histories(hit_bounces, c.escaped);
+            tally.record_histories(hit_bounces + 1, ended);
+        }
         (survivors, diffuse)
     }
 }

@@ -22,6 +22,7 @@ pub mod direct;
 pub mod emit;
 pub mod endless;
 mod hits;
+mod portal_photons;
 pub mod receiver_reach;
 pub mod scatter;
 pub mod shadow;
@@ -33,7 +34,7 @@ use crate::scene::{Estimator, Geometry, Scene};
 use crate::surface::Transport;
 use crate::tally::{CellPartial, ChunkTally, ReceiverGrid, Tallies};
 pub use batch::Scratch;
-use batch::{Lanes, Segment};
+use batch::{Lanes, Pass, Segment};
 pub use bounce_cap::{
     bounce_cap, bounce_cap_a_priori_bound, bounce_cap_bias_bound, BOUNCE_CAP_BIAS, MAX_BOUNCE_CAP,
 };
@@ -80,6 +81,9 @@ pub struct Tracer<'a> {
     lambert_track: bool,
     /// Where each receiver's per-history mean is tallied.
     total_spans: Vec<TotalSpan>,
+    /// Some light comes in by portals: each photon index also traces a portal photon
+    /// ([`portal_photons`]).
+    portals_on: bool,
 }
 
 impl<'a> Tracer<'a> {
@@ -108,8 +112,14 @@ impl<'a> Tracer<'a> {
         // The slim loop keeps no segment lane: every bounced photon stays `Emitted`, which
         // only receivers whose direct light is not sampled score by crossing.
         let any_samples_direct = receivers.iter().any(|r| r.estimator.direct_by_replicates());
-        let lambert_track =
-            !any_connects && !any_samples_direct && surfacings.iter().all(|s| s.lambert_only);
+        let emitters = Emitters::new(scene);
+        let portals_on = !scene.receivers.is_empty()
+            && (emitters.emitters.iter()).any(|e| !e.portals().is_empty());
+        // The slim loop's photons all score receivers alike: no portal weights.
+        let lambert_track = !any_connects
+            && !any_samples_direct
+            && !portals_on
+            && surfacings.iter().all(|s| s.lambert_only);
         let max_albedo = scene
             .materials
             .iter()
@@ -126,7 +136,7 @@ impl<'a> Tracer<'a> {
             geometry: g,
             surface_table: TriangleSurface::table(g),
             surfacings,
-            emitters: Emitters::new(scene),
+            emitters,
             seed,
             max_bounces: cap,
             bounce_cap_a_priori: bounce_cap_a_priori_bound(survival, cap),
@@ -141,6 +151,7 @@ impl<'a> Tracer<'a> {
                     .collect(),
             ),
             receivers,
+            portals_on,
         }
     }
 
@@ -187,6 +198,26 @@ impl<'a> Tracer<'a> {
         // two, so every score is the same bits as in lm, scaled exactly).
         let flux = self.emitters.total_flux_lm / self.emitters.score_unit;
         let live = if flux > 0.0 { count as usize } else { 0 };
+        self.emit(first, live, scratch);
+        // The parity of a photon's index is that of its chunk offset, flipped when the
+        // chunk starts at an odd index.
+        let odd_first = first % 2 == 1;
+        self.trace_batch(scratch, tally, (first, flux, odd_first), Pass::Map);
+        if self.portals_on && live > 0 {
+            self.emit_portal_photons(first, live, scratch, tally);
+            self.trace_batch(scratch, tally, (first, flux, odd_first), Pass::Portal);
+        }
+        fold_histories(
+            &mut scratch.pending,
+            &self.total_spans,
+            &mut scratch.cell_acc,
+            &mut tally.scores,
+        );
+    }
+
+    /// The batch of the chunk's `live` photons from `first`, as the lights emit them;
+    /// with portals, each with its receiver weight 1 until its first segment is known.
+    fn emit(&self, first: u64, live: usize, scratch: &mut Scratch) {
         // Every photon ray is a closest-hit ray from t = 0 to ∞: `tnear` and `tfar` are
         // set once here and never change while the batch shrinks.
         let rays = &mut scratch.rays;
@@ -196,6 +227,10 @@ impl<'a> Tracer<'a> {
         lanes.bounces = 0;
         lanes.segment.resize(live, Segment::Emitted);
         scratch.pending.clear();
+        scratch.weight.clear();
+        if self.portals_on {
+            scratch.weight.resize(live, 1.0);
+        }
         lanes.offset.extend(0..live as u32);
         // Each photon's stream is seeded where its emission draws from it.
         lanes.rng.resize(live, Pcg32::new(0, 0));
@@ -209,20 +244,25 @@ impl<'a> Tracer<'a> {
         // An emitter that forgot to write a photon's stream back would leave every photon
         // on the placeholder's one stream: plausible results, all correlated.
         debug_assert!(lanes.rng.iter().all(|r| *r != Pcg32::new(0, 0)));
-        // The parity of a photon's index is that of its chunk offset, flipped when the
-        // chunk starts at an odd index.
-        let odd_first = first % 2 == 1;
+    }
+
+    /// Traces the batch to the end of its histories. `(first, flux, odd_first)`: the
+    /// chunk's first photon index, the flux a photon carries, and its parity.
+    fn trace_batch(
+        &self,
+        scratch: &mut Scratch,
+        tally: &mut ChunkTally,
+        (first, flux, odd_first): (u64, f64, bool),
+        pass: Pass,
+    ) {
         while !scratch.rays.is_empty() {
             self.caster.intersect(&scratch.rays, &mut scratch.hits);
             tally.rays += scratch.rays.len() as u64;
-            self.step(scratch, tally, flux, odd_first);
+            if pass == Pass::Map && self.portals_on && scratch.lanes.bounces == 0 {
+                self.leave_portal_crossings(first, scratch);
+            }
+            self.step(scratch, tally, flux, odd_first, pass);
         }
-        fold_histories(
-            &mut scratch.pending,
-            &self.total_spans,
-            &mut scratch.cell_acc,
-            &mut tally.scores,
-        );
     }
 
     /// One bounce of every live photon, in short passes over the batch, each a loop the
@@ -231,7 +271,14 @@ impl<'a> Tracer<'a> {
     /// hit, compacting the survivors in place (lane order kept); then sample the diffuse
     /// survivors' new directions. Each photon draws its random numbers in the order its
     /// own history asks for them, whatever the batch around it.
-    fn step(&self, s: &mut Scratch, tally: &mut ChunkTally, flux: f64, odd_first: bool) {
+    fn step(
+        &self,
+        s: &mut Scratch,
+        tally: &mut ChunkTally,
+        flux: f64,
+        odd_first: bool,
+        pass: Pass,
+    ) {
         s.shadow_rays.clear();
         s.shadow_scores.clear();
         let n = s.rays.len();
@@ -241,7 +288,7 @@ impl<'a> Tracer<'a> {
                 r,
                 &s.rays,
                 t_hit,
-                &s.lanes,
+                (&s.lanes, &s.weight),
                 flux,
                 &mut s.marks,
                 &mut s.pending,
@@ -249,9 +296,9 @@ impl<'a> Tracer<'a> {
         }
         s.size_bounce_arrays(n);
         let (survivors, diffuse) = if self.lambert_track {
-            self.hits_pass::<true>(s, tally, flux, odd_first)
+            self.hits_pass::<true>(s, tally, flux, odd_first, pass)
         } else {
-            self.hits_pass::<false>(s, tally, flux, odd_first)
+            self.hits_pass::<false>(s, tally, flux, odd_first, pass)
         };
         self.end_bounce(s, tally, survivors, diffuse);
     }
@@ -335,14 +382,14 @@ impl<'a> Tracer<'a> {
     /// that leave it: one placed on a floor measures the floor's illuminance, or its
     /// luminance. Next-event receivers take by crossing only what they do not connect:
     /// light from specular interactions, and diffuse light from vertices in their near
-    /// zone.
+    /// zone. Each photon's score carries its receiver weight ([`receiver_weight`]).
     #[allow(clippy::too_many_arguments)]
     fn score_crossings(
         &self,
         r: &ReceiverGrid,
         rays: &RayBatch,
         t_hit: &[f32],
-        lanes: &Lanes,
+        (lanes, weight): (&Lanes, &[f64]),
         flux: f64,
         marks: &mut Vec<bool>,
         pending: &mut Vec<(u32, u32, f64)>,
@@ -366,8 +413,9 @@ impl<'a> Tracer<'a> {
                 Segment::Specular => true,
                 Segment::Connectable => !connects || c.distance < r.near_zone_m,
             };
-            if scores {
-                pending.push((offsets[k], c.cell, c.score_per_lm * flux));
+            let w = receiver_weight(weight, offsets[k]);
+            if scores && w > 0.0 {
+                pending.push((offsets[k], c.cell, c.score_per_lm * flux * w));
             }
         }
     }
@@ -425,6 +473,14 @@ impl<'a> Tracer<'a> {
             shadow_scores.push((offset, c.cell, score));
         }
     }
+}
+
+/// What a photon's receiver scores are multiplied by: its entry in the pass's
+/// `weight`s (by photon offset; a portal photon's weight, 0 for a disk photon whose
+/// first segment crosses a portal), or 1 when the pass has none.
+#[inline(always)]
+fn receiver_weight(weight: &[f64], offset: u32) -> f64 {
+    weight.get(offset as usize).copied().unwrap_or(1.0)
 }
 
 /// Where a receiver's per-history total is tallied: its cells `first..end` and the slot

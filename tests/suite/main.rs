@@ -34,6 +34,7 @@ mod physics {
     mod perez;
     mod physics;
     mod points;
+    mod portal_photons;
     mod render;
     mod surroundings;
     mod ugr;
