@@ -174,7 +174,8 @@ pub trait Emitter: Debug + Send + Sync {
 
     /// The openings (`[[portals]]`, local frame) its photons also come in by: a distant
     /// source's. Its photons whose first segment crosses one leave the receivers to
-    /// its [`Emitter::portal_photon`]s (`crate::trace`, docs/daylight.md *Openings*).
+    /// its [`Emitter::portal_photon`]s (the photon pass; docs/daylight.md, *Photons
+    /// through portals*).
     fn portals(&self) -> &[distant::Portal] {
         &[]
     }

@@ -25,6 +25,9 @@ pub struct Scratch {
     pub(super) shadow_rays: RayBatch,
     pub(super) shadow_scores: Vec<(u32, u32, f64)>,
     pub(super) occluded: Vec<bool>,
+    /// Through glazing: each shadow ray's transmittance, and the caster's buffers.
+    pub(super) through: Vec<f64>,
+    pub(super) shadow: super::shadow::ShadowScratch,
     /// Diffuse survivors of a bounce, whose directions are sampled in a pass of their
     /// own (f32 lanes): their slots in the batch (each scatters into the hemisphere of
     /// its `side`), their two random numbers and their new directions.

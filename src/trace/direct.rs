@@ -393,7 +393,8 @@ impl DirectLight<'_> {
                     self.queue(grid, light, p, source_point, weight, r as u32, s);
                 }
             }
-            self.shadows
+            rays += self
+                .shadows
                 .transmitted(&s.rays, &mut s.through, &mut s.shadow);
             s.totals.clear();
             s.totals.resize(block as usize, 0.0);
@@ -406,7 +407,6 @@ impl DirectLight<'_> {
                 // In the run's score unit (exact: a power of two).
                 sums.add_direct(y / self.emitters.score_unit);
             }
-            rays += s.rays.len() as u64;
             block_start += block;
         }
         rays

@@ -155,13 +155,11 @@ impl<'a> HitsOut<'a> {
         let w = sample.dir.as_vec3();
         let [dx, dy, dz] = &mut self.dir;
         (dx[j], dy[j], dz[j]) = (w.x, w.y, w.z);
-        // Emitted light that a pane passes straight on is still direct light: the
-        // receivers' next events take it through the pane.
-        let still_direct = sample.transmitted
-            && hit.surfacing.see_through
-            && self.survivors.segment[hit.k] == Segment::Emitted;
-        let segment = if still_direct {
-            Segment::Emitted
+        // A pane passes light on unbent, and next events and connections see through
+        // it: the segment stays what it was (emitted light still direct, light from a
+        // connected vertex still connected, its near zone now from the pane).
+        let segment = if sample.transmitted && hit.surfacing.see_through {
+            self.survivors.segment[hit.k]
         } else {
             Segment::after(sample.kind, hit.surfacing.glossy_connectable)
         };

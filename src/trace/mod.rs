@@ -11,10 +11,12 @@
 //!   expected contribution there; segments that leave a specular interaction (mirror,
 //!   glass: not connectable) still score by crossing, and so do diffuse segments that
 //!   cross the receiver within its near zone (one cell diagonal from their vertex),
-//!   where connections would have unbounded variance. A segment straight from its
-//!   source through glazing (no reflection) stays direct: next events see through
-//!   panes ([`shadow`]), so it is theirs. Connections stop at glazing: a reflected
-//!   photon reaches a receiver beyond a pane by crossing it.
+//!   where connections would have unbounded variance. Next events and connections
+//!   see through glazing ([`shadow`]: times the panes' T(θ)), so a segment a pane
+//!   passes on unbent stays what it was: straight from its source, direct; from a
+//!   connected vertex, connected, with its near zone measured from the last pane
+//!   (where a connection past a pane then lands within it, the photon scores by
+//!   crossing instead).
 
 mod batch;
 pub mod bounce_cap;
@@ -363,17 +365,39 @@ impl<'a> Tracer<'a> {
         rays.truncate(j);
         s.lanes.truncate(j);
         s.lanes.bounces += 1;
-        if !s.shadow_rays.is_empty() {
-            // Plain occlusion, glazing included: through a pane the photon's own
-            // transmitted segment scores by crossing (module docs).
-            self.caster.occluded(&s.shadow_rays, &mut s.occluded);
+        if s.shadow_rays.is_empty() {
+            return;
+        }
+        if !self.shadows.sees_through_glazing() {
             tally.rays += s.shadow_rays.len() as u64;
+            self.caster.occluded(&s.shadow_rays, &mut s.occluded);
             for (score, blocked) in s.shadow_scores.iter().zip(&s.occluded) {
                 if !blocked {
                     s.pending.push(*score);
                 }
             }
+            return;
         }
+        tally.rays += self
+            .shadows
+            .transmitted(&s.shadow_rays, &mut s.through, &mut s.shadow);
+        let rays = &s.shadow_rays;
+        for (k, (&(offset, cell, score), &t)) in s.shadow_scores.iter().zip(&s.through).enumerate()
+        {
+            // Within the near zone of the last pane's side, the photon's own segment
+            // past the pane scores by crossing (`score_crossings`), so this must not.
+            let length = Vec3::new(rays.dx[k], rays.dy[k], rays.dz[k]).length();
+            let past_pane = (s.shadow.past_last_pane[k] * length) as f64;
+            if t > 0.0 && past_pane >= self.receiver_of(cell).near_zone_m {
+                s.pending.push((offset, cell, score * t));
+            }
+        }
+    }
+
+    /// The receiver global cell `cell` belongs to.
+    fn receiver_of(&self, cell: u32) -> &ReceiverGrid {
+        let k = (self.receivers).partition_point(|r| r.first_cell + r.cell_count() as u32 <= cell);
+        &self.receivers[k]
     }
 
     /// Scores receiver `r` for every segment of the batch that crosses it (before the

@@ -1,8 +1,9 @@
 //! Shadow rays of next events (receivers' direct light, the eye pass's direct light):
 //! what reaches a point along each. Opaque surfaces block; thin glazing
 //! ([`crate::surface::Glazing`]) lets the light through unbent, times its transmittance
-//! T(θ) at the ray's incidence, so windows pass the sky and the sun to next events. A
-//! scene without glazing keeps the backend's occlusion path.
+//! T(θ) at the ray's incidence, so windows pass the sky and the sun to next events, and
+//! the photons' connections to receivers beyond a pane. A scene without glazing keeps
+//! the backend's occlusion path.
 
 use super::scatter::offset_origin;
 use crate::accel::{HitBatch, RayBatch, RayCaster};
@@ -34,6 +35,9 @@ pub struct ShadowScratch {
     /// Per ray of `rays` (and `next`), the index of the ray it continues.
     index: Vec<u32>,
     next_index: Vec<u32>,
+    /// Per ray of [`ShadowCaster::transmitted`]'s batch, how much of it lies past the
+    /// last pane it crosses (∞ past none), in units of its direction's length.
+    pub past_last_pane: Vec<f32>,
 }
 
 impl<'a> ShadowCaster<'a> {
@@ -49,24 +53,39 @@ impl<'a> ShadowCaster<'a> {
         }
     }
 
+    /// Whether the scene has glazing (else [`Self::transmitted`] is plain occlusion).
+    pub fn sees_through_glazing(&self) -> bool {
+        !self.glazing.is_empty()
+    }
+
     /// The fraction of each ray's light that arrives, into `through` (resized): 0 where
     /// an opaque surface lies between `tnear` and `tfar`, else the product of the
-    /// transmittances of the panes crossed (1 through none).
-    pub fn transmitted(&self, rays: &RayBatch, through: &mut Vec<f64>, s: &mut ShadowScratch) {
+    /// transmittances of the panes crossed (1 through none). Returns the rays cast: the
+    /// batch's, and each one's continuation past every pane.
+    pub fn transmitted(
+        &self,
+        rays: &RayBatch,
+        through: &mut Vec<f64>,
+        s: &mut ShadowScratch,
+    ) -> u64 {
         through.clear();
+        s.past_last_pane.clear();
+        s.past_last_pane.resize(rays.len(), f32::INFINITY);
         if self.glazing.is_empty() {
             self.caster.occluded(rays, &mut s.occluded);
             through.extend(s.occluded.iter().map(|&b| if b { 0.0 } else { 1.0 }));
-            return;
+            return rays.len() as u64;
         }
         through.resize(rays.len(), 1.0);
         s.rays.clone_from(rays);
         s.index.clear();
         s.index.extend(0..rays.len() as u32);
+        let mut cast = 0;
         for _ in 0..MAX_GLAZING_CROSSINGS {
             if s.rays.is_empty() {
-                return;
+                return cast;
             }
+            cast += s.rays.len() as u64;
             self.caster.intersect(&s.rays, &mut s.hits);
             self.cross_panes(through, s);
             std::mem::swap(&mut s.rays, &mut s.next);
@@ -75,6 +94,7 @@ impl<'a> ShadowCaster<'a> {
         for &i in &s.index {
             through[i as usize] = 0.0;
         }
+        cast
     }
 
     /// One round of [`Self::transmitted`]: each ray that hit glazing is attenuated and
@@ -102,6 +122,7 @@ impl<'a> ShadowCaster<'a> {
             };
             let origin = offset_origin(surface.point, leave, self.scene_scale);
             let rest = r.tfar[k] - s.hits.t[k];
+            s.past_last_pane[i] = rest;
             if through[i] > 0.0 && rest > 0.0 {
                 s.next.push(origin.to_array(), dir.to_array(), 0.0, rest);
                 s.next_index.push(i as u32);
