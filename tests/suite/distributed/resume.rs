@@ -322,6 +322,49 @@ fn merged_shards_are_bit_identical_to_one_run() {
     assert_one_line(&twice, &["given twice"]);
 }
 
+/// Portal photons (the daylit office under the sky and the sun: two distant lights,
+/// a portal, glazing) are a pure function of the photon index too: one thread, two,
+/// and two shards merged give the same bits.
+#[test]
+fn portal_photons_give_the_same_bits_on_any_threads_and_shards() {
+    let scene = "scenes/daylit_office_sun.toml";
+    let base = [
+        "run",
+        scene,
+        "--photons",
+        "300000",
+        "--seed",
+        "3",
+        "--quiet",
+    ];
+    let run = |name: &str, extra: &[&str]| {
+        let dir = temp_dir(name);
+        let mut args = base.to_vec();
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", dir.to_str().unwrap()]);
+        ok(luxtally(&args));
+        dir
+    };
+    let one = run("portal_t1", &["--threads", "1"]);
+    let two = run("portal_t2", &["--threads", "2"]);
+    assert_identical(&one, &two);
+    let shards: Vec<String> = (0..2)
+        .map(|i| {
+            let dir = run(&format!("portal_shard{i}"), &["--shard", &format!("{i}/2")]);
+            dir.to_str().unwrap().to_string()
+        })
+        .collect();
+    let merged = temp_dir("portal_merged");
+    ok(luxtally(&[
+        "merge",
+        &shards[1],
+        &shards[0],
+        "--out",
+        merged.to_str().unwrap(),
+    ]));
+    assert_identical(&one, &merged);
+}
+
 fn assert_one_line(out: &Output, needles: &[&str]) {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "stderr: {err}");
