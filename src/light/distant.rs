@@ -136,13 +136,20 @@ impl DistantTable {
         if self.is_dark() {
             return 0.0;
         }
-        if let (Some((nz, nphi)), true) = (self.grid, w.z > 0.0) {
-            let i = ((w.z * nz as f64) as usize).min(nz - 1);
-            let phi = libm::atan2(w.y, w.x).rem_euclid(2.0 * PI);
-            let j = ((phi / (2.0 * PI) * nphi as f64) as usize).min(nphi - 1);
-            return self.bounds[i * nphi + j] / self.total;
+        // The grid's bands come first: the region a direction is drawn from is the
+        // first that holds it, a band wherever z ≥ 0, and none of them below.
+        let mut first_other = 0;
+        if let Some((nz, nphi)) = self.grid {
+            if w.z >= 0.0 {
+                let i = ((w.z * nz as f64) as usize).min(nz - 1);
+                let phi = libm::atan2(w.y, w.x).rem_euclid(2.0 * PI);
+                let j = ((phi / (2.0 * PI) * nphi as f64) as usize).min(nphi - 1);
+                return self.bounds[i * nphi + j] / self.total;
+            }
+            first_other = nz * nphi;
         }
-        (self.regions.iter().zip(&self.bounds))
+        let (regions, bounds) = (&self.regions[first_other..], &self.bounds[first_other..]);
+        (regions.iter().zip(bounds))
             .find(|(r, _)| r.contains(w))
             .map_or(0.0, |(_, b)| b / self.total)
     }

@@ -38,11 +38,25 @@ pub struct Scratch {
     pub(super) marks: Vec<bool>,
     /// Per survivor, the normal of the side it leaves its surface on.
     pub(super) side: [Vec<f32>; 3],
-    /// Per photon offset, the weight of its receiver scores in this pass; empty: 1.
-    pub(super) weight: Vec<f64>,
     /// The chunk's portal photons before their sky is checked: photon offset, the
     /// photon and its stream.
     pub(super) portal_photons: Vec<(u32, PortalPhoton, Pcg32)>,
+    /// Photons spawned through portals at this round's exterior vertices, traced in the
+    /// next round ([`super::portal_photons`]).
+    pub(super) spawns: Vec<Spawn>,
+    pub(super) next_spawns: Vec<Spawn>,
+}
+
+/// A photon spawned at an exterior vertex through a portal: its history, ray, weight
+/// and the portal its first segment must cross first.
+#[derive(Clone, Debug)]
+pub(super) struct Spawn {
+    pub(super) offset: u32,
+    pub(super) origin: Vec3,
+    pub(super) dir: Vec3,
+    pub(super) weight: f64,
+    pub(super) portal: u32,
+    pub(super) rng: Pcg32,
 }
 
 impl Scratch {
@@ -68,8 +82,8 @@ pub(super) enum Pass {
     /// The lights' own photons: they deposit on the triangles (the scene map) and are
     /// the histories counted by bounce; they score receivers with their weights.
     Map,
-    /// Portal photons: they score receivers only.
-    Portal,
+    /// Portal and spawned photons: they score receivers only.
+    Receivers,
 }
 
 /// Where a photon's current segment started.
@@ -114,6 +128,11 @@ pub(super) struct Lanes {
     /// Where the current segment started.
     pub(super) segment: Vec<Segment>,
     pub(super) rng: Vec<Pcg32>,
+    /// With portals: the weight of each photon's receiver scores (a disk photon's 1
+    /// until a portal takes its light over, a portal photon's its share), and the
+    /// [`PortalRule`] its current segment is checked by. Empty without portals.
+    pub(super) weight: Vec<f64>,
+    pub(super) rule: Vec<PortalRule>,
 }
 
 impl Lanes {
@@ -121,7 +140,33 @@ impl Lanes {
         self.offset.truncate(n);
         self.segment.truncate(n);
         self.rng.truncate(n);
+        self.weight.truncate(n);
+        self.rule.truncate(n);
     }
+
+    /// The weight of lane `k`'s receiver scores: 1 without portals.
+    #[inline(always)]
+    pub(super) fn weight(&self, k: usize) -> f64 {
+        self.weight.get(k).copied().unwrap_or(1.0)
+    }
+}
+
+/// What a segment's portal crossings decide ([`super::Tracer::apply_portal_rules`]),
+/// from where it started: the light it would carry in by a portal is some other
+/// photon's, so it scores receivers (weight kept) only if:
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub(super) enum PortalRule {
+    /// always (a lamp's photon, a segment from an interior vertex);
+    #[default]
+    Free,
+    /// it crosses no portal (a sky's or sun's disk photon: its portal photons carry
+    /// what comes in straight);
+    FromSky,
+    /// the first portal it crosses is none of these (bits by portal index): it left an
+    /// exterior vertex, which spawned photons through them;
+    FromExterior(u32),
+    /// the first portal it crosses is this one (a spawned photon's first segment).
+    Spawned(u32),
 }
 
 /// The lanes a bounce's survivors are compacted into, in place: survivor `j` is written
@@ -133,6 +178,9 @@ pub(super) struct SurvivorLanes<'a> {
     pub(super) offset: &'a mut [u32],
     pub(super) segment: &'a mut [Segment],
     pub(super) rng: &'a mut [Pcg32],
+    /// Empty without portals.
+    pub(super) weight: &'a mut [f64],
+    pub(super) rule: &'a mut [PortalRule],
 }
 
 impl<'a> SurvivorLanes<'a> {
@@ -143,12 +191,25 @@ impl<'a> SurvivorLanes<'a> {
         [sx, sy, sz]: &'a mut [Vec<f32>; 3],
         lanes: &'a mut Lanes,
     ) -> Self {
+        let weighted = n.min(lanes.weight.len());
         SurvivorLanes {
             origin: [&mut ox[..n], &mut oy[..n], &mut oz[..n]],
             side: [&mut sx[..n], &mut sy[..n], &mut sz[..n]],
             offset: &mut lanes.offset[..n],
             segment: &mut lanes.segment[..n],
             rng: &mut lanes.rng[..n],
+            weight: &mut lanes.weight[..weighted],
+            rule: &mut lanes.rule[..weighted],
+        }
+    }
+
+    /// Survivor `j` (written from lane `k`) keeps the lane's weight, its new segment
+    /// checked by `rule`; nothing without portals.
+    #[inline(always)]
+    pub(super) fn carry(&mut self, j: usize, k: usize, rule: PortalRule) {
+        if !self.weight.is_empty() {
+            self.weight[j] = self.weight[k];
+            self.rule[j] = rule;
         }
     }
 

@@ -3,7 +3,7 @@
 //! triangle, is connected to next-event receivers, and goes to the kernel of its
 //! surface class ([`Surfacing`]), which plays the roulette and compacts the survivors.
 
-use super::batch::{Lanes, Pass, Scratch, Segment, SurvivorLanes};
+use super::batch::{Lanes, Pass, PortalRule, Scratch, Segment, SurvivorLanes};
 use super::scatter::scatter;
 use super::Tracer;
 use crate::accel::{RayBatch, Surface};
@@ -26,6 +26,9 @@ struct Hit<'s> {
     dir: DVec3,
     normal: DVec3,
     surfacing: &'s Surfacing,
+    /// The portal rule of a connected segment leaving this vertex: which portals'
+    /// light it leaves to the photons spawned here.
+    rule_after: PortalRule,
 }
 
 /// How far pass 2 has written each of its outputs: histories that end at this bounce
@@ -130,6 +133,7 @@ impl<'a> HitsOut<'a> {
         let (point, facing) = (hit.point, hit.facing);
         self.survivors
             .write(j, point, facing, hit.offset, Segment::Connectable, rng);
+        self.survivors.carry(j, hit.k, hit.rule_after);
         self.diffuse_slot[c.diffuse] = j as u32;
         let kept = survives as usize;
         c.ended += !survives as u64;
@@ -158,13 +162,18 @@ impl<'a> HitsOut<'a> {
         // A pane passes light on unbent, and next events and connections see through
         // it: the segment stays what it was (emitted light still direct, light from a
         // connected vertex still connected, its near zone now from the pane).
-        let segment = if sample.transmitted && hit.surfacing.see_through {
-            self.survivors.segment[hit.k]
+        let through_pane = sample.transmitted && hit.surfacing.see_through;
+        let (segment, rule) = if through_pane {
+            (self.survivors.segment[hit.k], PortalRule::Free)
         } else {
-            Segment::after(sample.kind, hit.surfacing.glossy_connectable)
+            match Segment::after(sample.kind, hit.surfacing.glossy_connectable) {
+                Segment::Connectable => (Segment::Connectable, hit.rule_after),
+                other => (other, PortalRule::Free),
+            }
         };
         self.survivors
             .write(j, hit.point, side, hit.offset, segment, rng);
+        self.survivors.carry(j, hit.k, rule);
         self.cursors.survivors += 1;
     }
 }
@@ -313,7 +322,7 @@ impl Tracer<'_> {
             };
             out.deposit(deposit_code(tri, back_face, indirect, odd), has_map && map);
             let surfacing = &self.surfacings[surface.material as usize];
-            let weight = super::receiver_weight(&s.weight, offset);
+            let weight = out.survivors.weight.get(k).copied().unwrap_or(1.0);
             if !LAMBERT_TRACK && self.any_connects && surfacing.connectable && weight > 0.0 {
                 self.connect(
                     surface.point,
@@ -331,6 +340,20 @@ impl Tracer<'_> {
                 out.cursors.ended += 1;
                 continue;
             }
+            let mut rule_after = PortalRule::Free;
+            if !LAMBERT_TRACK && surfacing.connectable && weight > 0.0 {
+                let exterior = self.exterior_of(surface.point);
+                if exterior != 0 {
+                    rule_after = PortalRule::FromExterior(exterior);
+                    self.spawn(
+                        (surface.point, normal, -dir),
+                        surfacing,
+                        (offset, weight, &mut out.survivors.rng[k]),
+                        exterior,
+                        &mut s.next_spawns,
+                    );
+                }
+            }
             let hit = Hit {
                 k,
                 offset,
@@ -339,6 +362,7 @@ impl Tracer<'_> {
                 dir,
                 normal: normal.as_dvec3(),
                 surfacing,
+                rule_after,
             };
             if LAMBERT_TRACK {
                 out.lambert_track(&hit);

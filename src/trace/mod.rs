@@ -36,7 +36,7 @@ use crate::scene::{Estimator, Geometry, Scene};
 use crate::surface::Transport;
 use crate::tally::{CellPartial, ChunkTally, ReceiverGrid, Tallies};
 pub use batch::Scratch;
-use batch::{Lanes, Pass, Segment};
+use batch::{Lanes, Pass, PortalRule, Segment};
 pub use bounce_cap::{
     bounce_cap, bounce_cap_a_priori_bound, bounce_cap_bias_bound, BOUNCE_CAP_BIAS, MAX_BOUNCE_CAP,
 };
@@ -83,9 +83,12 @@ pub struct Tracer<'a> {
     lambert_track: bool,
     /// Where each receiver's per-history mean is tallied.
     total_spans: Vec<TotalSpan>,
-    /// Some light comes in by portals: each photon index also traces a portal photon
-    /// ([`portal_photons`]).
+    /// Some light comes in by portals: each photon index also traces a portal photon,
+    /// and exterior vertices spawn photons through them ([`portal_photons`]).
     portals_on: bool,
+    /// The scene's portals (local frame), and the outsides of those that have one.
+    portals: Vec<crate::light::distant::Portal>,
+    exteriors: Vec<portal_photons::Exterior>,
 }
 
 impl<'a> Tracer<'a> {
@@ -115,8 +118,16 @@ impl<'a> Tracer<'a> {
         // only receivers whose direct light is not sampled score by crossing.
         let any_samples_direct = receivers.iter().any(|r| r.estimator.direct_by_replicates());
         let emitters = Emitters::new(scene);
-        let portals_on = !scene.receivers.is_empty()
-            && (emitters.emitters.iter()).any(|e| !e.portals().is_empty());
+        let portals = (emitters.emitters.iter())
+            .map(|e| e.portals().to_vec())
+            .find(|p| !p.is_empty())
+            .unwrap_or_default();
+        let portals_on = !scene.receivers.is_empty() && !portals.is_empty();
+        let exteriors = if portals_on {
+            portal_photons::exteriors(&portals, caster, scene_scale)
+        } else {
+            Vec::new()
+        };
         // The slim loop's photons all score receivers alike: no portal weights.
         let lambert_track = !any_connects
             && !any_samples_direct
@@ -154,6 +165,8 @@ impl<'a> Tracer<'a> {
             ),
             receivers,
             portals_on,
+            portals,
+            exteriors,
         }
     }
 
@@ -204,10 +217,20 @@ impl<'a> Tracer<'a> {
         // The parity of a photon's index is that of its chunk offset, flipped when the
         // chunk starts at an odd index.
         let odd_first = first % 2 == 1;
-        self.trace_batch(scratch, tally, (first, flux, odd_first), Pass::Map);
+        let chunk = (flux, odd_first);
+        self.trace_batch(scratch, tally, chunk, Pass::Map);
         if self.portals_on && live > 0 {
             self.emit_portal_photons(first, live, scratch, tally);
-            self.trace_batch(scratch, tally, (first, flux, odd_first), Pass::Portal);
+            self.trace_batch(scratch, tally, chunk, Pass::Receivers);
+            // Spawned photons may spawn others (out through the window, back off the
+            // building): rounds of them, as many as a photon's bounces at most.
+            for _ in 0..self.max_bounces {
+                if !self.load_spawns(scratch) {
+                    break;
+                }
+                self.trace_batch(scratch, tally, chunk, Pass::Receivers);
+            }
+            scratch.next_spawns.clear();
         }
         fold_histories(
             &mut scratch.pending,
@@ -229,9 +252,16 @@ impl<'a> Tracer<'a> {
         lanes.bounces = 0;
         lanes.segment.resize(live, Segment::Emitted);
         scratch.pending.clear();
-        scratch.weight.clear();
         if self.portals_on {
-            scratch.weight.resize(live, 1.0);
+            lanes.weight.resize(live, 1.0);
+            lanes.rule.extend((0..live as u64).map(|k| {
+                let light = self.emitters.light_of(first + k);
+                if self.emitters.emitters[light].portals().is_empty() {
+                    PortalRule::Free
+                } else {
+                    PortalRule::FromSky
+                }
+            }));
         }
         lanes.offset.extend(0..live as u32);
         // Each photon's stream is seeded where its emission draws from it.
@@ -248,20 +278,20 @@ impl<'a> Tracer<'a> {
         debug_assert!(lanes.rng.iter().all(|r| *r != Pcg32::new(0, 0)));
     }
 
-    /// Traces the batch to the end of its histories. `(first, flux, odd_first)`: the
-    /// chunk's first photon index, the flux a photon carries, and its parity.
+    /// Traces the batch to the end of its histories. `(flux, odd_first)`: the flux a
+    /// photon carries, and the parity of the chunk's first photon index.
     fn trace_batch(
         &self,
         scratch: &mut Scratch,
         tally: &mut ChunkTally,
-        (first, flux, odd_first): (u64, f64, bool),
+        (flux, odd_first): (f64, bool),
         pass: Pass,
     ) {
         while !scratch.rays.is_empty() {
             self.caster.intersect(&scratch.rays, &mut scratch.hits);
             tally.rays += scratch.rays.len() as u64;
-            if pass == Pass::Map && self.portals_on && scratch.lanes.bounces == 0 {
-                self.leave_portal_crossings(first, scratch);
+            if self.portals_on {
+                self.apply_portal_rules(scratch, pass);
             }
             self.step(scratch, tally, flux, odd_first, pass);
         }
@@ -290,7 +320,7 @@ impl<'a> Tracer<'a> {
                 r,
                 &s.rays,
                 t_hit,
-                (&s.lanes, &s.weight),
+                &s.lanes,
                 flux,
                 &mut s.marks,
                 &mut s.pending,
@@ -406,14 +436,14 @@ impl<'a> Tracer<'a> {
     /// that leave it: one placed on a floor measures the floor's illuminance, or its
     /// luminance. Next-event receivers take by crossing only what they do not connect:
     /// light from specular interactions, and diffuse light from vertices in their near
-    /// zone. Each photon's score carries its receiver weight ([`receiver_weight`]).
+    /// zone. Each photon's score carries its receiver weight ([`Lanes::weight`]).
     #[allow(clippy::too_many_arguments)]
     fn score_crossings(
         &self,
         r: &ReceiverGrid,
         rays: &RayBatch,
         t_hit: &[f32],
-        (lanes, weight): (&Lanes, &[f64]),
+        lanes: &Lanes,
         flux: f64,
         marks: &mut Vec<bool>,
         pending: &mut Vec<(u32, u32, f64)>,
@@ -437,7 +467,7 @@ impl<'a> Tracer<'a> {
                 Segment::Specular => true,
                 Segment::Connectable => !connects || c.distance < r.near_zone_m,
             };
-            let w = receiver_weight(weight, offsets[k]);
+            let w = lanes.weight(k);
             if scores && w > 0.0 {
                 pending.push((offsets[k], c.cell, c.score_per_lm * flux * w));
             }
@@ -497,14 +527,6 @@ impl<'a> Tracer<'a> {
             shadow_scores.push((offset, c.cell, score));
         }
     }
-}
-
-/// What a photon's receiver scores are multiplied by: its entry in the pass's
-/// `weight`s (by photon offset; a portal photon's weight, 0 for a disk photon whose
-/// first segment crosses a portal), or 1 when the pass has none.
-#[inline(always)]
-fn receiver_weight(weight: &[f64], offset: u32) -> f64 {
-    weight.get(offset as usize).copied().unwrap_or(1.0)
 }
 
 /// Where a receiver's per-history total is tallied: its cells `first..end` and the slot
