@@ -62,6 +62,9 @@ class Result:
     def __init__(self, summary, arrays, handle=None):
         self.summary = summary
         self._handle = handle
+        #: Seconds from the run's end to this object (statistics, arrays, dict); None
+        #: for a result read back from files.
+        self.transfer_s = None
         self.receivers = {
             name: Receiver(name, summary["receivers"][name], a) for name, a in arrays.items()
         }

@@ -13,13 +13,19 @@ use numpy::{IntoPyArray, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
+use std::time::Instant;
 
 /// The finished run as a `luxtally.Result`.
+/// Its `transfer_s` is the seconds from the run's end to the `Result`: the summary's
+/// statistics, the arrays and the dict (BENCHMARKS.md, "Python").
 pub fn run_result(py: Python<'_>, handle: RunHandle) -> PyResult<Py<PyAny>> {
+    let began = Instant::now();
     let state = handle.result.state(&handle.scene, &handle.options);
     let summary = py.detach(|| luxtally::output::summary::build(&state));
     let handle = Py::new(py, handle)?;
-    wrap(py, summary, Some(handle.into_any()))
+    let result = wrap(py, summary, Some(handle.into_any()))?;
+    result.setattr(py, "transfer_s", began.elapsed().as_secs_f64())?;
+    Ok(result)
 }
 
 /// `Result.load(out_dir)`: a CLI run's summary.json read back (as `luxtally report`
