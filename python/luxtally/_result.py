@@ -32,12 +32,20 @@ class Receiver:
         return self.summary["mean"]
 
     @property
+    def mean_sigma(self):
+        """The mean's standard error (figures.mean_sigma), in the receiver's unit;
+        NaN when unknown."""
+        sigma = self.summary["figures"]["mean_sigma"]
+        return float("nan") if sigma is None else sigma
+
+    @property
     def rel_error(self):
         """The mean's relative error: ``{"arithmetic": ..., "quadratic": ...}``."""
         return self.summary["rel_error"]
 
     @property
     def unit(self):
+        """lx or cd/m²."""
         return self.summary["unit"]
 
     @property

@@ -91,3 +91,13 @@ def test_result_carries_the_run_s_record():
 
 def test_backends_listed_include_embree():
     assert "embree" in luxtally.backends()
+
+
+def test_obvhs_backend_gives_the_cli_s_obvhs_bits(cli, tmp_path):
+    # scripts/test.sh builds both the package and the CLI with the obvhs feature.
+    assert "obvhs" in luxtally.backends(), "the package was built without --features obvhs"
+    result = luxtally.Scene.load(OFFICE).run(photons=PHOTONS, seed=3, backend="obvhs")
+    cli("run", OFFICE, "--photons", PHOTONS, "--seed", 3, "--backend", "obvhs",
+        "--out", tmp_path, "--quiet")
+    assert_same_bits(result.receivers["desk"].values, summary_arrays(tmp_path, "desk", "values"))
+    assert result.summary["backend"] == "obvhs"
