@@ -4,6 +4,9 @@
 //! the engine's run into arrays, the engine's errors into exceptions. It holds no
 //! engine logic of its own (docs/python.md).
 
+// `!(x > 0.0)` is deliberate, as in the engine: it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use pyo3::prelude::*;
 
 mod errors;
