@@ -9,8 +9,9 @@ class Receiver:
     """One receiver's result. Arrays are ``cells[1] × cells[0]``: ``values`` (lx or
     cd/m²), ``sigma`` (absolute standard error, NaN where unknown), ``hits``
     (photon crossings scored), ``direct`` and ``direct_sigma`` (the direct light's
-    part, None when the estimator has none), ``vov``, ``upper_bound`` (dark cells'
-    bound), ``reliable`` and ``dark`` (flags). ``summary`` holds the rest of the
+    part, None when the estimator has none), ``vov``, ``dof`` (effective degrees of
+    freedom), ``scoring_histories``, ``upper_bound`` (dark cells' bound), ``reliable``
+    and ``dark`` (flags). ``summary`` holds the rest of the
     receiver's summary.json entry (mean, rel_error, figures, ...)."""
 
     def __init__(self, name, summary, arrays):
@@ -23,6 +24,8 @@ class Receiver:
         self.direct_sigma = arrays["direct_sigma"]
         self.vov = arrays["vov"]
         self.upper_bound = arrays["upper_bound"]
+        self.dof = arrays["dof"]
+        self.scoring_histories = arrays["scoring_histories"]
         self.reliable = arrays["reliable"]
         self.dark = arrays["dark"]
 
@@ -70,8 +73,10 @@ class Result:
     def __init__(self, summary, arrays, handle=None):
         self.summary = summary
         self._handle = handle
-        #: Seconds from the run's end to this object (statistics, arrays, dict); None
-        #: for a result read back from files.
+        #: Seconds of the summary's statistics after the run (what the CLI computes
+        #: for summary.json), and of handing them to Python (arrays, dict); None for
+        #: a result read back from files.
+        self.summary_s = None
         self.transfer_s = None
         self.receivers = {
             name: Receiver(name, summary["receivers"][name], a) for name, a in arrays.items()

@@ -14,6 +14,8 @@ class Receiver:
     direct_sigma: Optional[npt.NDArray[np.float64]]
     vov: Optional[npt.NDArray[np.float64]]
     upper_bound: Optional[npt.NDArray[np.float64]]
+    dof: Optional[npt.NDArray[np.float64]]
+    scoring_histories: Optional[npt.NDArray[np.uint64]]
     reliable: npt.NDArray[np.bool_]
     dark: npt.NDArray[np.bool_]
     @property
@@ -32,6 +34,7 @@ class Receiver:
 class Result:
     summary: dict[str, Any]
     receivers: dict[str, Receiver]
+    summary_s: Optional[float]
     transfer_s: Optional[float]
     def __init__(self, summary: dict[str, Any], arrays: dict[str, Any], handle: Any = None) -> None: ...
     @staticmethod

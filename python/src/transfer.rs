@@ -16,15 +16,18 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 /// The finished run as a `luxtally.Result`.
-/// Its `transfer_s` is the seconds from the run's end to the `Result`: the summary's
-/// statistics, the arrays and the dict (BENCHMARKS.md, "Python").
+/// Its `summary_s` is the seconds the summary's statistics took (what the CLI computes
+/// for summary.json), `transfer_s` those of handing them to Python: the arrays and the
+/// dict (BENCHMARKS.md, "Python").
 pub fn run_result(py: Python<'_>, handle: RunHandle) -> PyResult<Py<PyAny>> {
     let began = Instant::now();
     let state = handle.result.state(&handle.scene, &handle.options);
     let summary = py.detach(|| luxtally::output::summary::build(&state));
+    let summary_s = began.elapsed().as_secs_f64();
     let handle = Py::new(py, handle)?;
     let result = wrap(py, summary, Some(handle.into_any()))?;
-    result.setattr(py, "transfer_s", began.elapsed().as_secs_f64())?;
+    result.setattr(py, "transfer_s", began.elapsed().as_secs_f64() - summary_s)?;
+    result.setattr(py, "summary_s", summary_s)?;
     Ok(result)
 }
 
@@ -71,10 +74,12 @@ fn receiver_arrays<'py>(py: Python<'py>, r: &mut ReceiverSummary) -> PyResult<Bo
         "upper_bound",
         grid(py, shape, std::mem::take(&mut r.upper_bound))?,
     )?;
+    d.set_item("dof", grid(py, shape, std::mem::take(&mut r.dof))?)?;
+    let histories = std::mem::take(&mut r.scoring_histories);
+    d.set_item("scoring_histories", grid(py, shape, histories)?)?;
     d.set_item("reliable", grid(py, shape, reliable)?)?;
     d.set_item("dark", grid(py, shape, dark)?)?;
-    // Kept in the dict: the cells' statuses as words (status is summarised by the
-    // flags above; dof and scoring histories stay with the summary's numbers).
+    // The statuses are the flags above (a word per cell would be a Python object each).
     r.status.clear();
     Ok(d)
 }

@@ -20,7 +20,10 @@ fn totals(log: &str) -> String {
         .expect("log written");
     let out = awk.wait_with_output().expect("awk ends");
     assert!(out.status.success());
-    String::from_utf8(out.stdout).expect("utf-8").trim().to_string()
+    String::from_utf8(out.stdout)
+        .expect("utf-8")
+        .trim()
+        .to_string()
 }
 
 const CARGO: &str = "running 3 tests
