@@ -5,8 +5,8 @@ use crate::errors::SceneError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 
-/// `value` (dicts, lists or tuples, str, bool, int, float) as a TOML value; `at` is its
-/// key path, for the message when a value has no TOML form.
+/// `value` (dicts, lists or tuples, numpy arrays, str, bool, int, float) as a TOML
+/// value; `at` is its key path, for the message when a value has no TOML form.
 pub fn to_toml(value: &Bound<'_, PyAny>, at: &str) -> PyResult<toml::Value> {
     // bool before int: Python's bool is an int.
     if let Ok(b) = value.cast::<PyBool>() {
@@ -35,7 +35,17 @@ pub fn to_toml(value: &Bound<'_, PyAny>, at: &str) -> PyResult<toml::Value> {
         }
         return Ok(toml::Value::Array(array));
     }
-    // A numpy scalar or anything else float() accepts reads as a number.
+    // numpy arrays and scalars: as their Python lists and numbers.
+    if value.hasattr("__array__")? && value.hasattr("tolist")? {
+        let plain = value.call_method0("tolist")?;
+        if !plain.hasattr("__array__")? {
+            return to_toml(&plain, at);
+        }
+    }
+    // Other integers by `__index__`, the rest by what float() accepts.
+    if let Ok(i) = value.extract::<i64>() {
+        return Ok(toml::Value::Integer(i));
+    }
     if let Ok(f) = value.extract::<f64>() {
         return Ok(toml::Value::Float(f));
     }

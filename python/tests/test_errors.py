@@ -127,3 +127,15 @@ def test_bad_run_options_raise_the_cli_message(cli, tmp_path, flag, kwargs):
 def test_a_value_without_toml_form_names_its_key():
     with pytest.raises(luxtally.SceneError, match=r"materials\.wall\.reflectance"):
         luxtally.Scene.from_dict({"materials": {"wall": {"reflectance": object()}}})
+
+
+def test_numpy_arrays_and_scalars_read_as_lists_and_numbers():
+    import numpy as np
+
+    document = tomllib.loads(ROOM)
+    document["receivers"][0]["cells"] = np.array([4, 4])
+    document["receivers"][0]["u"] = np.array([3.0, 0.0, 0.0])
+    document["materials"]["wall"]["reflectance"] = np.float32(0.5)
+    scene = luxtally.Scene.from_dict(document)
+    assert scene.receivers == ["floor"]
+    assert scene.to_dict()["receivers"][0]["cells"] == [4, 4]

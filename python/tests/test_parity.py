@@ -4,6 +4,7 @@ import filecmp
 import sys
 
 import numpy as np
+import pytest
 
 import luxtally
 from conftest import SCENES, assert_same_bits, summary_arrays
@@ -101,3 +102,13 @@ def test_obvhs_backend_gives_the_cli_s_obvhs_bits(cli, tmp_path):
         "--out", tmp_path, "--quiet")
     assert_same_bits(result.receivers["desk"].values, summary_arrays(tmp_path, "desk", "values"))
     assert result.summary["backend"] == "obvhs"
+
+
+def test_to_dataframe_has_a_row_per_cell():
+    pd = pytest.importorskip("pandas")
+    result = luxtally.Scene.load(OFFICE).run(photons=20_000, seed=1)
+    frame = result.to_dataframe()
+    desk = result.receivers["desk"]
+    assert isinstance(frame, pd.DataFrame) and len(frame) == desk.values.size
+    row = frame[(frame.i == 5) & (frame.j == 3)].iloc[0]
+    assert row.value == desk.values[3, 5] and row.hits == desk.hits[3, 5]
