@@ -40,6 +40,7 @@ class Scene:
         absolute: bool = False,
         min_hits: Optional[int] = None,
         stop_if_unreachable: bool = False,
+        until: Optional[str] = None,
         seed: Optional[int] = None,
         threads: Optional[int] = None,
         estimator: Optional[str] = None,

@@ -5,7 +5,7 @@
 use crate::errors::{to_py, IntoPy, SceneError};
 use crate::scene_dict::{self, parse_path, set_at, Step};
 use luxtally::accel::{self, Backend, Bvh, RayCaster};
-use luxtally::criteria::StopCriteria;
+use luxtally::criteria::{StopCriteria, Until};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::{Path, PathBuf};
@@ -106,7 +106,7 @@ impl Scene {
 
     /// Traces photons until the first stop criterion is met; returns a
     /// `luxtally.Result`. Arguments as `luxtally run`'s flags (None: the scene's
-    /// `[simulation]`). `checkpoint`: a directory to save the run's state in every
+    /// `[simulation]`; `until="decided"` as `--until decided`). `checkpoint`: a directory to save the run's state in every
     /// `checkpoint_every` seconds and at its end (also on Ctrl-C), for `resume`.
     /// `resume`: go on from the checkpoint in that directory. `shard`: `"I/N"`, trace
     /// only that part of the photons (needs `photons` and `checkpoint`; combine with
@@ -114,7 +114,7 @@ impl Scene {
     /// this thread), or True for a progress bar.
     #[pyo3(signature = (*, photons = None, time_limit = None, target_error = None,
         target = None, absolute = false, min_hits = None, stop_if_unreachable = false,
-        seed = None, threads = None, estimator = None, backend = None, bvh = None,
+        until = None, seed = None, threads = None, estimator = None, backend = None, bvh = None,
         progress = None, checkpoint = None, checkpoint_every = crate::run::DEFAULT_PERIOD_S,
         resume = None, shard = None))]
     #[allow(clippy::too_many_arguments)]
@@ -128,6 +128,7 @@ impl Scene {
         absolute: bool,
         min_hits: Option<u64>,
         stop_if_unreachable: bool,
+        until: Option<String>,
         seed: Option<u64>,
         threads: Option<usize>,
         estimator: Option<String>,
@@ -147,7 +148,15 @@ impl Scene {
             absolute,
             min_hits,
             stop_if_unreachable,
-            until: None,
+            until: match until.as_deref() {
+                None => None,
+                Some("decided") => Some(Until::Decided),
+                Some(other) => {
+                    return Err(SceneError::new_err(format!(
+                        "--until: unknown value `{other}` (expected decided)"
+                    )))
+                }
+            },
         };
         if !(checkpoint_every > 0.0) {
             return Err(SceneError::new_err(format!(

@@ -1,6 +1,7 @@
 """Same scene, seed and photons: the package gives the CLI's numbers, bit for bit."""
 
 import filecmp
+import json
 import sys
 
 import numpy as np
@@ -116,3 +117,15 @@ def test_to_dataframe_has_a_row_per_cell():
     assert isinstance(frame, pd.DataFrame) and len(frame) == desk.values.size
     row = frame[(frame.i == 5) & (frame.j == 3)].iloc[0]
     assert row.value == desk.values[3, 5] and row.hits == desk.hits[3, 5]
+
+
+def test_until_decided_stops_as_the_cli_does(cli, tmp_path):
+    scene = SCENES / "en12464_office.toml"
+    result = luxtally.Scene.load(scene).run(until="decided", photons=2_000_000, seed=1)
+    cli("run", scene, "--until", "decided", "--photons", 2_000_000, "--seed", 1,
+        "--out", tmp_path, "--quiet", "--outputs", "none")
+    # Where it stops depends on the epochs' sizes, which follow the measured rate: only
+    # the reason is the same.
+    cli_summary = json.loads((tmp_path / "summary.json").read_text())
+    assert result.stop_reason == cli_summary["stop_reason"] == "decided"
+    assert result.summary["verdicts"]["overall"] == cli_summary["verdicts"]["overall"]
