@@ -38,8 +38,11 @@ pub fn merge(
             let scene = luxtally::scene::load(&scene_path)?;
             let mut options = merged_options(&scene, first, first_path)?;
             if let Some(t) = threads {
+                if t == 0 {
+                    return Err(luxtally::Error::input("--threads", "must be at least 1"));
+                }
                 luxtally::run::check_threads(t)?;
-                options.threads = t.max(1);
+                options.threads = t;
             }
             let setup = Instant::now();
             let caster = accel::build_with(options.backend, options.bvh, &scene.geometry)?;
