@@ -2,7 +2,9 @@
 # Installs the Debian packages luxtally needs to build, test and run the README's commands,
 # when they are missing: build-essential and pkg-config, libclang-dev (bindgen loads
 # libclang), libembree-dev (Embree 3), chromium (tests/report_browser.rs opens report.html
-# in it, headless) and OpenMPI (openmpi-bin, libopenmpi-dev).
+# in it, headless), OpenMPI (openmpi-bin, libopenmpi-dev), and python3-venv and
+# python3-dev (scripts/test.sh builds the Python package into a virtual environment:
+# Debian 12 refuses system-wide `pip install`; pyo3 links libpython).
 #
 # What is missing is decided from dpkg's package state (`dpkg-query -W`), never from files
 # on disk: a libclang-cpp14 pulled in by another package is not libclang-dev. Only the
@@ -11,7 +13,8 @@
 # Safe to run again: does nothing when everything is installed.
 set -euo pipefail
 
-packages=(build-essential pkg-config libclang-dev libembree-dev chromium openmpi-bin libopenmpi-dev)
+packages=(build-essential pkg-config libclang-dev libembree-dev chromium openmpi-bin libopenmpi-dev
+  python3-venv python3-dev)
 
 # True when dpkg reports PACKAGE as installed (status "install ok installed", or
 # "hold ok installed"); a removed package with its configuration left is not.

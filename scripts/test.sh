@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs clippy and rustfmt, then every test: with the Embree backend alone, then with the
-# obvhs backend as well (backend parity), then the MPI test (feature mpi). Tests are
+# obvhs backend as well (backend parity), then the Python package's build and pytest
+# suite (scripts/test_python.sh), then the MPI test (feature mpi). Tests are
 # built optimised ([profile.test]) so physics tests can use real photon counts.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,5 +20,7 @@ else
 fi
 cargo test --release
 cargo test --release --features obvhs
+# The Python package (docs/python.md): a venv, maturin, the extension, pytest.
+scripts/test_python.sh
 # MPI (docs/distributed.md): two ranks bit-identical to one process.
 cargo test --release --features mpi --test mpi

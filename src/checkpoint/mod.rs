@@ -35,7 +35,7 @@ mod saver;
 mod shards;
 pub use format::FORMAT_VERSION;
 pub use saver::{Checkpointer, SaveCost};
-pub use shards::merge_shards;
+pub use shards::{merge_shards, merged_options};
 
 /// The checkpoint in an output directory, and the one before it.
 pub const FILE: &str = "checkpoint.bin";

@@ -4,7 +4,7 @@
 use super::{Checkpoint, Numbers};
 use crate::accel::RayCaster;
 use crate::run::{self, RunOptions, RunResult};
-use crate::scene::{fingerprint, Scene};
+use crate::scene::{fingerprint, Estimator, Scene};
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -25,6 +25,33 @@ pub fn merge_shards(
         records.push(c.into_progress(path.display().to_string())?);
     }
     run::merge(scene, options, caster, setup, &records)
+}
+
+/// The options of the run the shards split: the scene's, with the first shard's
+/// numbers (seed, photons, backend, estimator); `path` is where it was read, for
+/// messages.
+pub fn merged_options(scene: &Scene, first: &Checkpoint, path: &Path) -> Result<RunOptions> {
+    let mut options = RunOptions::from_scene(scene);
+    options.seed = first.numbers.seed;
+    options.stop.photons = first.photons_goal;
+    options.backend = first.numbers.backend.parse()?;
+    options.estimator = match first.numbers.estimator.as_deref() {
+        None => None,
+        Some(name) => Some(saved_estimator(name).ok_or_else(|| {
+            Error::input(
+                path.display().to_string(),
+                format!("unknown estimator `{name}`"),
+            )
+        })?),
+    };
+    Ok(options)
+}
+
+/// The estimator a checkpoint names (it keeps the Debug spelling, `NextEvent`).
+fn saved_estimator(name: &str) -> Option<Estimator> {
+    Estimator::ALL
+        .into_iter()
+        .find(|e| format!("{e:?}") == name)
 }
 
 /// Refuses shards that do not make one whole run of `scene` with `options`' numbers

@@ -219,12 +219,17 @@ pub fn write_live_report(out: &Path, state: &RunState<'_>, refresh_s: f64) -> Re
 
 /// `luxtally report OUT_DIR`: report.html and the PNGs again from OUT_DIR/summary.json.
 pub fn rebuild_report(out: &Path) -> Result<()> {
-    let path = out.join("summary.json");
-    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
-    let summary: summary::Summary = serde_json::from_str(&text)
-        .map_err(|e| Error::input(path.display().to_string(), format!("not a summary: {e}")))?;
+    let summary = read_summary(out)?;
     write_receiver_pngs(out, &summary)?;
     write_report_html(out, &summary_json(&summary)?, report::DEFAULT_REFRESH_S)
+}
+
+/// The summary.json of the run in `out`, read back (NaN where the file has null).
+pub fn read_summary(out: &Path) -> Result<summary::Summary> {
+    let path = out.join("summary.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+    serde_json::from_str(&text)
+        .map_err(|e| Error::input(path.display().to_string(), format!("not a summary: {e}")))
 }
 
 /// `receivers/NAME.{exr,csv}` and `receivers/NAME_figures.csv`.

@@ -72,6 +72,7 @@ mod distributed {
 
 mod project {
     mod bundled_scenes;
+    mod ci_totals;
     mod layering;
     mod setup_script;
 }

@@ -5,8 +5,6 @@ use crate::run::limit_threads;
 use luxtally::accel;
 use luxtally::checkpoint::Checkpoint;
 use luxtally::output::{self, Finished, Outputs};
-use luxtally::run::RunOptions;
-use luxtally::scene::Estimator;
 use luxtally::{Error, Result};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -38,19 +36,7 @@ pub fn command(args: MergeArgs) -> Result<()> {
     };
     let scene = luxtally::scene::load(&scene_path)?;
     let (first_path, first) = &shards[0];
-    let mut options = RunOptions::from_scene(&scene);
-    options.seed = first.numbers.seed;
-    options.stop.photons = first.photons_goal;
-    options.backend = first.numbers.backend.parse()?;
-    options.estimator = match first.numbers.estimator.as_deref() {
-        None => None,
-        Some(name) => Some(saved_estimator(name).ok_or_else(|| {
-            Error::input(
-                first_path.display().to_string(),
-                format!("unknown estimator `{name}`"),
-            )
-        })?),
-    };
+    let mut options = luxtally::checkpoint::merged_options(&scene, first, first_path)?;
     if let Some(t) = args.threads {
         options.threads = t;
     }
@@ -73,11 +59,4 @@ pub fn command(args: MergeArgs) -> Result<()> {
         out.display()
     );
     Ok(())
-}
-
-/// The estimator a checkpoint names (it keeps the Debug spelling, `NextEvent`).
-fn saved_estimator(name: &str) -> Option<Estimator> {
-    Estimator::ALL
-        .into_iter()
-        .find(|e| format!("{e:?}") == name)
 }

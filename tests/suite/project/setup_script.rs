@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Every package setup.sh ensures, in its order.
-const ALL: [&str; 7] = [
+const ALL: [&str; 9] = [
     "build-essential",
     "pkg-config",
     "libclang-dev",
@@ -16,6 +16,8 @@ const ALL: [&str; 7] = [
     "chromium",
     "openmpi-bin",
     "libopenmpi-dev",
+    "python3-venv",
+    "python3-dev",
 ];
 
 /// The machine the script sees.
@@ -183,7 +185,13 @@ fn some_installed_installs_exactly_the_rest() {
         calls,
         [
             "apt-get update -qq".to_string(),
-            install_line(&["libclang-dev", "chromium", "libopenmpi-dev"])
+            install_line(&[
+                "libclang-dev",
+                "chromium",
+                "libopenmpi-dev",
+                "python3-venv",
+                "python3-dev"
+            ])
         ]
     );
 }
@@ -242,6 +250,8 @@ fn not_root_and_no_sudo_names_the_command_to_run_and_installs_nothing() {
                 ("libembree-dev", "install ok installed"),
                 ("openmpi-bin", "install ok installed"),
                 ("libopenmpi-dev", "install ok installed"),
+                ("python3-venv", "install ok installed"),
+                ("python3-dev", "install ok installed"),
             ],
             root: false,
             sudo: false,
@@ -254,5 +264,32 @@ fn not_root_and_no_sudo_names_the_command_to_run_and_installs_nothing() {
     assert!(
         err.contains("`apt-get update && apt-get install -y libclang-dev chromium`"),
         "names the command: {err}"
+    );
+}
+
+#[test]
+fn a_machine_without_the_python_toolchain_installs_venv_and_dev_only() {
+    // Debian 12 with everything the Rust build needs but Python's venv and headers (a
+    // python3 alone comes with the base system).
+    let packages: Vec<(&str, &str)> = ALL[..7]
+        .iter()
+        .map(|p| (*p, "install ok installed"))
+        .chain([("python3", "install ok installed")])
+        .collect();
+    let (out, calls) = run_setup(
+        "python",
+        &Machine {
+            packages: &packages,
+            root: true,
+            sudo: false,
+        },
+    );
+    assert_ok(&out);
+    assert_eq!(
+        calls,
+        [
+            "apt-get update -qq".to_string(),
+            install_line(&["python3-venv", "python3-dev"])
+        ]
     );
 }
