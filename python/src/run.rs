@@ -22,8 +22,8 @@ use std::sync::Arc;
 use std::time::Duration;
 
 /// How often the calling thread checks for Ctrl-C while a run goes on. The run itself
-/// stops at the end of its current epoch (epochs last at most 2 s, a quarter of the time
-/// run so far), after saving its checkpoint.
+/// stops once the chunks it is tracing are done (its epoch cut short at them), after
+/// saving its checkpoint.
 const POLL: Duration = Duration::from_millis(100);
 
 /// What the calling thread hears of an epoch.
@@ -189,8 +189,8 @@ pub fn run(
         outcome.map_err(|_| crate::errors::LuxtallyError::new_err("the run's thread panicked"))?;
     let result = result.py_err()?;
     if let Some(e) = raised {
-        // Ctrl-C (or the callback's exception): the run stopped at an epoch's end and
-        // its checkpoint, if asked, is saved.
+        // Ctrl-C (or the callback's exception): the run stopped after the chunks it was
+        // tracing, and its checkpoint, if asked, is saved.
         return Err(e);
     }
     if let Some(e) = save_error {
@@ -206,7 +206,7 @@ pub fn run(
 
 /// The calling thread while the run goes on: each epoch to `progress`, signals
 /// checked every [`POLL`]; the first exception (KeyboardInterrupt, or the callback's)
-/// goes to `raised` and stops the run at its epoch's end.
+/// goes to `raised` and stops the run after the chunks it is tracing.
 fn wait_for_epochs(
     rx: &mpsc::Receiver<Epoch>,
     interrupt: &AtomicBool,

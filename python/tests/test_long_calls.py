@@ -101,7 +101,7 @@ def test_ctrl_c_raises_keyboard_interrupt_and_leaves_a_resumable_checkpoint(tmp_
     out, _ = child.communicate(timeout=30)
     assert child.returncode == 0, out
     report = json.loads(out.strip().splitlines()[-1])
-    # The run stops at its epoch's end (epochs last at most 2 s).
+    # The run stops after the chunks it is tracing (generous: a loaded machine).
     assert report["interrupted_at"] - sent < 3.0
     assert (tmp_path / "checkpoint.bin").exists()
     done = report["photons"]

@@ -43,6 +43,8 @@ pub(super) struct Epochs<'r, 's> {
     /// Chunk tallies reused from epoch to epoch (in chunk order, so the merge order
     /// never changes).
     buffers: Vec<ChunkTally>,
+    /// Which of an epoch's chunks were traced before an interrupt.
+    traced: Vec<bool>,
 }
 
 impl<'r, 's> Epochs<'r, 's> {
@@ -85,19 +87,21 @@ impl<'r, 's> Epochs<'r, 's> {
             progress,
             fewest_hits: None,
             buffers: Vec::new(),
+            traced: Vec::new(),
         }
     }
 
     /// Traces the next epoch and folds it in (epochs end at every schedule point, so
     /// every run passes through them), then tops the direct light up (not for a shard);
-    /// returns the photons traced.
-    pub(super) fn trace(&mut self) -> u64 {
+    /// returns the photons traced. An `interrupt` during the epoch ends it early, after
+    /// the chunks traced in order so far (as an epoch of that size would have).
+    pub(super) fn trace(&mut self, interrupt: &AtomicBool) -> u64 {
         let done = self.progress.tallies.photons;
         let count = self
             .epoch_photons
             .min(self.max_photons - done)
             .min(next_schedule_point(done) - done);
-        let merge_start = self.trace_chunks(self.first_photon + done, count);
+        let (count, merge_start) = self.trace_chunks(self.first_photon + done, count, interrupt);
         let p = &mut self.progress;
         p.times.merge_s += merge_start.elapsed().as_secs_f64();
         if p.shard.is_none() {
@@ -110,9 +114,12 @@ impl<'r, 's> Epochs<'r, 's> {
 
     /// Traces photons `first .. first + count` in fixed chunks (on this process's
     /// threads, or shared out by the distributor) and folds them into the tallies in
-    /// chunk order (and, for a shard, their records into the chunk log); returns when
-    /// the merge began.
-    fn trace_chunks(&mut self, first: u64, count: u64) -> Instant {
+    /// chunk order (and, for a shard, their records into the chunk log); returns the
+    /// photons folded and when the merge began. On this process's threads an
+    /// `interrupt` leaves the chunks not yet started untraced, and only those before
+    /// the first of them are folded (a Ctrl-C stops within a chunk's time, not an
+    /// epoch's; the rest of the epoch's work is dropped).
+    fn trace_chunks(&mut self, first: u64, count: u64, interrupt: &AtomicBool) -> (u64, Instant) {
         let chunks: Vec<(u64, u32)> = (0..count.div_ceil(CHUNK_PHOTONS))
             .map(|c| {
                 let start = first + c * CHUNK_PHOTONS;
@@ -137,15 +144,38 @@ impl<'r, 's> Epochs<'r, 's> {
                     })
             })
         };
-        match self.distributor.as_deref_mut() {
-            Some(d) => d.trace(&chunks, results, &mut local),
-            None => local(&chunks, results),
-        }
+        let kept = match self.distributor.as_deref_mut() {
+            Some(d) => {
+                d.trace(&chunks, results, &mut local);
+                chunks.len()
+            }
+            None => {
+                let traced = &mut self.traced;
+                traced.clear();
+                traced.resize(chunks.len(), false);
+                pool.install(|| {
+                    (chunks.par_iter().zip(results.par_iter_mut()))
+                        .zip(traced.par_iter_mut())
+                        .for_each(|((&(first, n), tally), traced)| {
+                            if interrupt.load(Ordering::Relaxed) {
+                                return;
+                            }
+                            SCRATCH.with_borrow_mut(|scratch| {
+                                tracer.trace_chunk_into(first, n, scratch, tally)
+                            });
+                            *traced = true;
+                        })
+                });
+                traced.iter().take_while(|&&t| t).count()
+            }
+        };
         let merge_start = Instant::now();
-        for (chunk, &(_, n)) in results.iter().zip(&chunks) {
+        let mut folded = 0;
+        for (chunk, &(_, n)) in results.iter().zip(&chunks).take(kept) {
             self.progress.fold_chunk(chunk, n);
+            folded += n as u64;
         }
-        merge_start
+        (folded, merge_start)
     }
 
     /// The statistics after an epoch, `elapsed_s` into the run: the target's error into

@@ -252,7 +252,7 @@ pub fn run_from(
     let clock = Instant::now();
     loop {
         let epoch_start = Instant::now();
-        let count = run.trace();
+        let count = run.trace(interrupt);
         let elapsed_s = run.elapsed_before_s + clock.elapsed().as_secs_f64();
         let reason = run.evaluate(elapsed_s, interrupt);
         observer.epoch(&run.state(&run_setup, reason));

@@ -322,6 +322,46 @@ fn merged_shards_are_bit_identical_to_one_run() {
     assert_one_line(&twice, &["given twice"]);
 }
 
+/// Ctrl-C (SIGINT) mid-epoch: the run stops at the chunks traced in order so far, on a
+/// multiple of the chunk size, with its outputs and checkpoint, and resuming it ends
+/// bit-identical to a run never interrupted.
+#[test]
+fn an_interrupted_run_resumes_to_the_same_bits() {
+    let (dir, full) = (temp_dir("sigint"), temp_dir("sigint_full"));
+    let base = [
+        "run",
+        SCENE,
+        "--photons",
+        "6000000",
+        "--seed",
+        "4",
+        "--quiet",
+    ];
+    fn with<'a>(base: &[&'a str], extra: &[&'a str]) -> Vec<&'a str> {
+        [base, extra].concat()
+    }
+    let out = ["--out", dir.to_str().unwrap(), "--checkpoint-every", "0.1"];
+    let mut child = spawn(&with(&base, &out));
+    // After its first epoch: the Ctrl-C handler is in place.
+    assert!(wait_for_new_checkpoint(&mut child, &dir, &None));
+    let pid = child.id().to_string();
+    let sent = Command::new("kill").args(["-INT", &pid]).status().unwrap();
+    assert!(sent.success());
+    child.wait().unwrap();
+    let interrupted = numbers_of(&dir);
+    let photons = interrupted["photons_emitted"].as_u64().unwrap();
+    let summary: Value =
+        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["stop_reason"], "interrupted", "{summary:?}");
+    assert!(
+        photons < 12_000_000 && photons.is_multiple_of(4096),
+        "{photons} photons"
+    );
+    ok(luxtally(&with(&base, &["--resume", dir.to_str().unwrap()])));
+    ok(luxtally(&with(&base, &["--out", full.to_str().unwrap()])));
+    assert_identical(&dir, &full);
+}
+
 /// Portal photons (the daylit office under the sky and the sun: two distant lights,
 /// a portal, glazing) are a pure function of the photon index too: one thread, two,
 /// and two shards merged give the same bits.
