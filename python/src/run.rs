@@ -45,10 +45,25 @@ struct ChannelObserver {
     checkpoints: Option<Checkpointer>,
     /// The first save that failed: the run goes on, `run` raises it at the end.
     save_error: Option<luxtally::Error>,
+    /// Where an interrupted run without a checkpoint directory saved its checkpoint.
+    interrupted_into: Option<PathBuf>,
 }
 
 impl Observer for ChannelObserver {
     fn epoch(&mut self, state: &RunState<'_>) {
+        if self.checkpoints.is_none() && state.stop_reason == Some(StopReason::Interrupted) {
+            // Ctrl-C with no checkpoint asked for: one in a fresh temporary directory,
+            // so the work done is not lost (KeyboardInterrupt names it).
+            match interrupt_dir() {
+                Ok(dir) => {
+                    self.checkpoints = Some(Checkpointer::new(&dir, f64::INFINITY, state.scene));
+                    self.interrupted_into = Some(dir);
+                }
+                Err(e) => {
+                    self.save_error.get_or_insert(e);
+                }
+            }
+        }
         if let Some(c) = &mut self.checkpoints {
             if let Err(e) = c.epoch(state) {
                 self.save_error.get_or_insert(e);
@@ -157,6 +172,7 @@ pub fn run(
             .as_deref()
             .map(|d| Checkpointer::new(d, request.checkpoint_every_s, &shared)),
         save_error: None,
+        interrupted_into: None,
     };
     let interrupt = AtomicBool::new(false);
     let mut raised: Option<PyErr> = None;
@@ -178,19 +194,31 @@ pub fn run(
                     &mut observer,
                     start,
                 );
-                (r, observer.save_error)
+                (r, observer.save_error, observer.interrupted_into)
             });
             let rx = rx;
             wait_for_epochs(&rx, &interrupt, progress.as_ref(), &mut raised);
             worker.join()
         })
     });
-    let (result, save_error) =
+    let (result, save_error, interrupted_into) =
         outcome.map_err(|_| crate::errors::LuxtallyError::new_err("the run's thread panicked"))?;
     let result = result.py_err()?;
     if let Some(e) = raised {
         // Ctrl-C (or the callback's exception): the run stopped after the chunks it was
-        // tracing, and its checkpoint, if asked, is saved.
+        // tracing, and its checkpoint is saved (in a temporary directory if none was
+        // asked for, which a KeyboardInterrupt names).
+        if let (Some(dir), true) = (
+            &interrupted_into,
+            e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py),
+        ) {
+            return Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(format!(
+                "interrupted after {} photons; checkpoint saved in {}: \
+                 run(..., resume=that directory) continues it",
+                result.progress.tallies.photons,
+                dir.display()
+            )));
+        }
         return Err(e);
     }
     if let Some(e) = save_error {
@@ -202,6 +230,18 @@ pub fn run(
         result,
     };
     transfer::run_result(py, handle)
+}
+
+/// A new directory under the system's temporary one for an interrupted run's checkpoint.
+fn interrupt_dir() -> luxtally::Result<PathBuf> {
+    let nanos = (std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH))
+        .map_or(0, |d| d.as_nanos());
+    let dir = std::env::temp_dir().join(format!(
+        "luxtally-interrupted-{}-{nanos}",
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).map_err(|e| luxtally::Error::io(&dir, e))?;
+    Ok(dir)
 }
 
 /// The calling thread while the run goes on: each epoch to `progress`, signals

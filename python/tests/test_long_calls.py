@@ -112,3 +112,45 @@ def test_ctrl_c_raises_keyboard_interrupt_and_leaves_a_resumable_checkpoint(tmp_
     assert resumed.photons == total
     assert_same_bits(resumed.receivers["desk"].values, whole.receivers["desk"].values)
     assert_same_bits(resumed.receivers["desk"].sigma, whole.receivers["desk"].sigma)
+
+
+CHILD_NO_CHECKPOINT = textwrap.dedent(
+    """
+    import json, sys, luxtally
+    scene = luxtally.Scene.load(sys.argv[1])
+    def progress(p):
+        if p["photons"] and not getattr(progress, "said", False):
+            progress.said = True
+            print("started", flush=True)
+    try:
+        scene.run(photons=10**10, seed=5, progress=progress)
+    except KeyboardInterrupt as e:
+        print(json.dumps({"message": str(e)}), flush=True)
+        sys.exit(0)
+    sys.exit(3)
+    """
+)
+
+
+def test_ctrl_c_without_a_checkpoint_directory_saves_one_and_names_it():
+    child = subprocess.Popen(
+        [sys.executable, "-c", CHILD_NO_CHECKPOINT, str(OFFICE)],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert child.stdout.readline().strip() == "started"
+    time.sleep(0.5)
+    child.send_signal(signal.SIGINT)
+    out, _ = child.communicate(timeout=30)
+    assert child.returncode == 0, out
+    message = json.loads(out.strip().splitlines()[-1])["message"]
+    # "interrupted after N photons; checkpoint saved in DIR: run(..., resume=...) ..."
+    photons = int(message.split("interrupted after ")[1].split(" photons")[0])
+    folder = message.split("checkpoint saved in ")[1].split(": run(")[0]
+    assert os.path.exists(os.path.join(folder, "checkpoint.bin")), message
+    total = photons + 200_000
+    scene = luxtally.Scene.load(OFFICE)
+    resumed = scene.run(photons=total, seed=5, resume=folder)
+    whole = scene.run(photons=total, seed=5)
+    assert resumed.photons == total
+    assert_same_bits(resumed.receivers["desk"].values, whole.receivers["desk"].values)
