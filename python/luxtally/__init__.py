@@ -38,5 +38,8 @@ def merge(dirs, scene=None, threads=None):
     """The shards' checkpoints in ``dirs`` (each the ``checkpoint=`` directory of a
     ``Scene.run(shard="I/N", ...)``) merged into the run they split, as
     ``luxtally merge`` does: the same numbers as one unsharded run. ``scene`` is a
-    scene file's path (default: the one the shards recorded)."""
-    return _merge([str(d) for d in dirs], None if scene is None else str(scene), threads)
+    ``Scene`` (as ``set`` left it) or a scene file's path (default: the one the shards
+    recorded); it must be the scene the shards ran."""
+    if scene is not None and not isinstance(scene, Scene):
+        scene = str(scene)
+    return _merge([str(d) for d in dirs], scene, threads)

@@ -13,6 +13,6 @@ from ._result import Receiver as Receiver, Result as Result
 
 def merge(
     dirs: Iterable[Union[str, PathLike[str]]],
-    scene: Optional[Union[str, PathLike[str]]] = None,
+    scene: Optional[Union[Scene, str, PathLike[str]]] = None,
     threads: Optional[int] = None,
 ) -> Result: ...

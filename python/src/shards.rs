@@ -2,6 +2,7 @@
 
 use crate::errors::IntoPy;
 use crate::run::RunHandle;
+use crate::scene::Scene;
 use crate::transfer;
 use luxtally::accel;
 use luxtally::checkpoint::{merge_shards, merged_options, Checkpoint};
@@ -11,16 +12,30 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// The shards in `dirs` (each a `checkpoint=` directory of a `shard=` run) merged into
-/// the run they split, as a `luxtally.Result`; `scene` (a path) defaults to the scene
-/// file the shards recorded. The same numbers as one unsharded run.
+/// the run they split, as a `luxtally.Result`; `scene` (a `luxtally.Scene`, or a path)
+/// defaults to the scene file the shards recorded. The same numbers as one unsharded
+/// run.
+/// The scene a merge is given: one loaded in Python (as `set` left it), or a file.
+enum Given {
+    Loaded(Arc<luxtally::scene::Scene>),
+    File(PathBuf),
+}
+
 #[pyfunction]
 #[pyo3(signature = (dirs, scene = None, threads = None))]
 pub fn merge(
     py: Python<'_>,
     dirs: Vec<PathBuf>,
-    scene: Option<PathBuf>,
+    scene: Option<&Bound<'_, PyAny>>,
     threads: Option<usize>,
 ) -> PyResult<Py<PyAny>> {
+    let given = match scene {
+        None => None,
+        Some(s) => Some(match s.extract::<PyRef<'_, Scene>>() {
+            Ok(loaded) => Given::Loaded(loaded.scene.clone()),
+            Err(_) => Given::File(s.extract::<PathBuf>()?),
+        }),
+    };
     let handle = py
         .detach(|| -> luxtally::Result<RunHandle> {
             let mut shards = Vec::new();
@@ -34,8 +49,11 @@ pub fn merge(
                     "no shard directories given",
                 ));
             };
-            let scene_path = scene.unwrap_or_else(|| PathBuf::from(&first.scene_path));
-            let scene = luxtally::scene::load(&scene_path)?;
+            let scene = match given {
+                Some(Given::Loaded(scene)) => scene,
+                Some(Given::File(path)) => Arc::new(luxtally::scene::load(&path)?),
+                None => Arc::new(luxtally::scene::load(&PathBuf::from(&first.scene_path))?),
+            };
             let mut options = merged_options(&scene, first, first_path)?;
             if let Some(t) = threads {
                 if t == 0 {
@@ -48,7 +66,7 @@ pub fn merge(
             let caster = accel::build_with(options.backend, options.bvh, &scene.geometry)?;
             let result = merge_shards(&scene, &options, caster.as_ref(), setup, shards)?;
             Ok(RunHandle {
-                scene: Arc::new(scene),
+                scene,
                 options,
                 result,
             })

@@ -31,6 +31,20 @@ def test_shards_merged_give_the_unsharded_bits_and_the_cli_s(cli, tmp_path):
     assert_same_bits(merged.receivers["desk"].sigma, whole.receivers["desk"].sigma)
     cli("merge", *dirs, "--out", tmp_path / "cli")
     assert_same_bits(merged.receivers["desk"].values, summary_arrays(tmp_path / "cli", "desk", "values"))
+    # The loaded scene itself, and the one the shards recorded, give the same run.
+    for given in (scene, None):
+        again = luxtally.merge(dirs, scene=given)
+        assert_same_bits(again.receivers["desk"].values, whole.receivers["desk"].values)
+
+
+def test_shards_merged_with_another_scene_are_refused(tmp_path):
+    scene = luxtally.Scene.load(OFFICE)
+    dirs = [tmp_path / f"shard{i}" for i in range(2)]
+    for i, d in enumerate(dirs):
+        scene.run(photons=100_000, seed=3, shard=f"{i}/2", checkpoint=d)
+    scene.set("materials.wall.reflectance", 0.6)
+    with pytest.raises(luxtally.SceneError, match="another scene"):
+        luxtally.merge(dirs, scene=scene)
 
 
 def test_a_shard_needs_a_checkpoint_directory():
