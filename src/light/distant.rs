@@ -244,12 +244,15 @@ impl Portal {
     }
 }
 
-/// A photon aimed through an opening ([`DistantEmitter::portal_photon`]): a point of a
-/// portal, the photon's unit direction there, and its flux relative to a disk photon's.
+/// A photon aimed through an opening ([`DistantEmitter::portal_photon`]): where it
+/// starts on the scene's disk, its unit direction, the portal it was aimed through
+/// (its first segment must cross that one first), and its flux relative to a disk
+/// photon's.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PortalPhoton {
-    pub point: DVec3,
+    pub origin: DVec3,
     pub dir: DVec3,
+    pub portal: u32,
     pub weight: f64,
 }
 
@@ -365,14 +368,14 @@ impl Emitter for DistantEmitter {
         &self.portals
     }
 
-    /// A photon through the portals (docs/daylight.md, *Openings*): a portal picked by
-    /// area, a point uniformly on it, a direction drawn in proportion to L as a disk
-    /// photon's. Of the lines a disk photon follows, those through that point: the
-    /// density of such a line's point on the disk is 1/(A·|cos θ|) against the disk's
-    /// 1/(πR²), so it carries A·|cos θ|/(πR²) of a disk photon's flux, A the portals'
-    /// total area and θ from the portal's normal. None where no disk photon follows the
-    /// line (it would miss the disk) or where it crosses another portal first on its
-    /// way in (that portal's photons carry it, so no line is counted twice).
+    /// A photon through the portals (docs/daylight.md, *Photons through portals*): a
+    /// portal picked by area, a point uniformly on it, a direction drawn in proportion
+    /// to L as a disk photon's, and the photon started where that line meets the disk.
+    /// The density of such a line's point on the disk is 1/(A·|cos θ|) against the
+    /// disk's 1/(πR²), so it carries A·|cos θ|/(πR²) of a disk photon's flux, A the
+    /// portals' total area and θ from the portal's normal. None where the line misses
+    /// the disk (no disk photon follows it). The photon pass keeps it only if its first
+    /// segment crosses this portal first (nothing before it, no other portal first).
     fn portal_photon(&self, rng: &mut Pcg32) -> Option<PortalPhoton> {
         let total: f64 = self.portals.iter().map(Portal::area_m2).sum();
         if !(total > 0.0) || self.table.is_dark() {
@@ -389,25 +392,15 @@ impl Emitter for DistantEmitter {
         let point = portal.corner + portal.u * uniform(rng) + portal.v * uniform(rng);
         let w = self.table.sample(rng);
         let disk_center = self.center + w * (self.radius * 1.01);
-        let to_disk = (disk_center - point).dot(w);
-        let on_disk = point + w * to_disk;
-        if (on_disk - disk_center).length_squared() > self.radius * self.radius {
-            return None;
-        }
-        // Coplanar portals tie: the one listed first takes the line.
-        let tie = 1e-9 * self.radius;
-        let crossed_first = (self.portals.iter().enumerate()).any(|(j, o)| {
-            j != k
-                && o.crossing(point, w)
-                    .is_some_and(|t| t < to_disk && (t > tie || (t.abs() <= tie && j < k)))
-        });
-        if crossed_first {
+        let origin = point + w * (disk_center - point).dot(w);
+        if (origin - disk_center).length_squared() > self.radius * self.radius {
             return None;
         }
         let cos = w.dot(portal.u.cross(portal.v)).abs() / portal.area_m2();
         Some(PortalPhoton {
-            point,
+            origin,
             dir: -w,
+            portal: k as u32,
             weight: total * cos / (PI * self.radius * self.radius),
         })
     }

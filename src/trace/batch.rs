@@ -3,7 +3,6 @@
 //! survivors in place, and the per-worker scratch buffers all passes share.
 
 use crate::accel::{HitBatch, RayBatch};
-use crate::light::distant::PortalPhoton;
 use crate::surface::LobeKind;
 use crate::tally::CellPartial;
 use glam::Vec3;
@@ -38,9 +37,6 @@ pub struct Scratch {
     pub(super) marks: Vec<bool>,
     /// Per survivor, the normal of the side it leaves its surface on.
     pub(super) side: [Vec<f32>; 3],
-    /// The chunk's portal photons before their sky is checked: photon offset, the
-    /// photon and its stream.
-    pub(super) portal_photons: Vec<(u32, PortalPhoton, Pcg32)>,
     /// Photons spawned through portals at this round's exterior vertices, traced in the
     /// next round ([`super::portal_photons`]).
     pub(super) spawns: Vec<Spawn>,
@@ -201,6 +197,12 @@ impl<'a> SurvivorLanes<'a> {
             weight: &mut lanes.weight[..weighted],
             rule: &mut lanes.rule[..weighted],
         }
+    }
+
+    /// The weight of lane `k`'s receiver scores: 1 without portals.
+    #[inline(always)]
+    pub(super) fn weight(&self, k: usize) -> f64 {
+        self.weight.get(k).copied().unwrap_or(1.0)
     }
 
     /// Survivor `j` (written from lane `k`) keeps the lane's weight, its new segment

@@ -322,7 +322,7 @@ impl Tracer<'_> {
             };
             out.deposit(deposit_code(tri, back_face, indirect, odd), has_map && map);
             let surfacing = &self.surfacings[surface.material as usize];
-            let weight = out.survivors.weight.get(k).copied().unwrap_or(1.0);
+            let weight = out.survivors.weight(k);
             if !LAMBERT_TRACK && self.any_connects && surfacing.connectable && weight > 0.0 {
                 self.connect(
                     surface.point,

@@ -220,7 +220,7 @@ impl<'a> Tracer<'a> {
         let chunk = (flux, odd_first);
         self.trace_batch(scratch, tally, chunk, Pass::Map);
         if self.portals_on && live > 0 {
-            self.emit_portal_photons(first, live, scratch, tally);
+            self.emit_portal_photons(first, live, scratch);
             self.trace_batch(scratch, tally, chunk, Pass::Receivers);
             // Spawned photons may spawn others (out through the window, back off the
             // building): rounds of them, as many as a photon's bounces at most.

@@ -5,9 +5,11 @@
 //! such photon belongs to the history of the photon whose light it takes over, so its
 //! scores add up with that history's as one sample:
 //! - each photon index of a sky or a sun also traces a portal photon
-//!   ([`crate::light::Emitter::portal_photon`]: a line through a point of a portal,
-//!   with its share of a disk photon's flux), and a disk photon scores receivers only
-//!   if its first segment crosses no portal ([`PortalRule::FromSky`]);
+//!   ([`crate::light::Emitter::portal_photon`]: from the disk along a line through a
+//!   point of a portal, with its share of a disk photon's flux, kept only if that
+//!   portal is the first its first segment crosses, [`PortalRule::Spawned`]), and a
+//!   disk photon scores receivers only if its first segment crosses no portal
+//!   ([`PortalRule::FromSky`]);
 //! - at a connected vertex on a portal's outside (the building opposite, an
 //!   overhang), a photon is spawned through a point of one of those portals, sampled
 //!   by its solid angle and weighed by the surface's f·cos/p, and the vertex's own
@@ -28,7 +30,6 @@ use crate::light::distant::Portal;
 use crate::rng::PhotonStreams;
 use crate::sampling::{cosine_hemisphere, uniform, SphericalRect};
 use crate::surface::Transport;
-use crate::tally::ChunkTally;
 use glam::{DVec3, Vec3};
 use rand::RngCore;
 use rand_pcg::Pcg32;
@@ -203,18 +204,14 @@ impl Tracer<'_> {
     }
 
     /// The batch of the chunk's portal photons (photons `first .. first + count`, each
-    /// from its own portal stream): those whose line reaches the sky from the portal
-    /// (an occlusion ray from the point towards the source, past the receivers'
-    /// slack), each starting twice the slack before its point, with its weight.
-    pub(super) fn emit_portal_photons(
-        &self,
-        first: u64,
-        count: usize,
-        s: &mut Scratch,
-        tally: &mut ChunkTally,
-    ) {
+    /// from its own portal stream), each from the disk, with its weight, checked after
+    /// its first intersection as a spawned photon is ([`PortalRule::Spawned`]).
+    pub(super) fn emit_portal_photons(&self, first: u64, count: usize, s: &mut Scratch) {
         let streams = PhotonStreams::portal(self.seed, first);
-        s.portal_photons.clear();
+        let (rays, lanes) = (&mut s.rays, &mut s.lanes);
+        rays.truncate(0);
+        lanes.truncate(0);
+        lanes.bounces = 0;
         for k in 0..count {
             let light = self.emitters.light_of(first + k as u64);
             let emitter = &self.emitters.emitters[light];
@@ -222,34 +219,19 @@ impl Tracer<'_> {
                 continue;
             }
             let mut rng = streams.get(k);
-            if let Some(photon) = emitter.portal_photon(&mut rng) {
-                s.portal_photons.push((k as u32, photon, rng));
+            if let Some(p) = emitter.portal_photon(&mut rng) {
+                rays.push(
+                    p.origin.as_vec3().into(),
+                    p.dir.as_vec3().into(),
+                    0.0,
+                    f32::INFINITY,
+                );
+                lanes.offset.push(k as u32);
+                lanes.segment.push(Segment::Emitted);
+                lanes.rng.push(rng);
+                lanes.weight.push(p.weight);
+                lanes.rule.push(PortalRule::Spawned(p.portal));
             }
-        }
-        let slack = self.receiver_slack;
-        s.shadow_rays.clear();
-        for (_, p, _) in &s.portal_photons {
-            let (o, w) = (p.point.as_vec3(), (-p.dir).as_vec3());
-            s.shadow_rays
-                .push(o.into(), w.into(), slack as f32, f32::INFINITY);
-        }
-        self.caster.occluded(&s.shadow_rays, &mut s.occluded);
-        tally.rays += s.shadow_rays.len() as u64;
-        let (rays, lanes) = (&mut s.rays, &mut s.lanes);
-        rays.truncate(0);
-        lanes.truncate(0);
-        lanes.bounces = 0;
-        for ((offset, p, rng), _) in (s.portal_photons.iter())
-            .zip(&s.occluded)
-            .filter(|(_, blocked)| !**blocked)
-        {
-            let o = (p.point - p.dir * (2.0 * slack)).as_vec3();
-            rays.push(o.into(), p.dir.as_vec3().into(), 0.0, f32::INFINITY);
-            lanes.offset.push(*offset);
-            lanes.segment.push(Segment::Emitted);
-            lanes.rng.push(rng.clone());
-            lanes.weight.push(p.weight);
-            lanes.rule.push(PortalRule::Free);
         }
     }
 }
