@@ -9,7 +9,8 @@
 //! → `stats`
 //! (equations of method.md, forecast, stop criteria) → `run` (validate, set up, epochs;
 //! `distributed` shares its chunks among processes) → `checkpoint` (save, resume, merge
-//! shards) → `output` (summary.json and files) → `render` (the eye pass) → `limits`
+//! shards) → `annual` (a year of daylight: daylight coefficients, hourly illuminance,
+//! annual metrics) → `output` (summary.json and files) → `render` (the eye pass) → `limits`
 //! (sizes a run or render before it allocates). The `luxtally` binary (src/bin/luxtally/:
 //! one module per command, the benchmarks among them) is over all of them; `fixtures`
 //! (test scenes and rays, hidden from the docs) serves tests/, benches/ and the
@@ -20,13 +21,14 @@
 //! encoder, palettes, quantile), `criteria` (the stop criteria of the scene file, the
 //! command line and the run), `input` (scene-file entries read with their key path,
 //! value checks), `weather` (EPW weather files) → `photometry` → `light` → `surface` → `scene` → `accel` → `tally` →
-//! `trace` → `stats` → `distributed` → `run` → `checkpoint` → `output` → `render` →
+//! `trace` → `stats` → `distributed` → `run` → `checkpoint` → `annual` → `output` → `render` →
 //! `limits` → `fixtures`. docs/architecture.md has the whole data path.
 
 // `!(x > 0.0)` is deliberate throughout: it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
+pub mod annual;
 pub mod checkpoint;
 pub mod criteria;
 pub mod distributed;

@@ -13,6 +13,12 @@ fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// The seed of part `index` of a run seeded with `seed` (an annual run's sources): two
+/// SplitMix finalisers deep, so neighbouring parts' seeds share nothing.
+pub fn sub_seed(seed: u64, index: u64) -> u64 {
+    mix64(mix64(seed ^ 0x243f_6a88_85a3_08d3) ^ index.wrapping_mul(GOLDEN_GAMMA))
+}
+
 /// Random stream `index` of a run seeded with `seed`, three SplitMix finalisers deep: an
 /// eye-pass pixel's, a direct-light replicate's ([`direct_stream`]). The photon pass
 /// seeds its photons more cheaply ([`PhotonStreams`]).

@@ -6,10 +6,13 @@
 //! and the numbering runs towards east. Indices here start at 0 with the first sky
 //! patch (Radiance's bin 1; its bin 0 is the ground).
 
+use super::distant::{DistantEmitter, DistantTable, Portal, Region};
 use super::sun::direction_rad;
+use super::{BoundingSphere, Emitter, Light};
 use crate::error::{Error, Result};
 use glam::DVec3;
-use std::f64::consts::{FRAC_PI_2, TAU};
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::sync::Arc;
 
 /// Tregenza's patches per 12° band, horizon up (the zenith cap apart).
 const TREGENZA_BANDS: [u32; 7] = [30, 30, 24, 24, 18, 12, 6];
@@ -209,6 +212,127 @@ impl SkyPatches {
     }
 }
 
+impl SkyPatches {
+    /// Patch `k` as regions of the sphere of directions (φ from +x towards +y, as
+    /// [`Region::Band`]): one band, or two where it straddles φ = 0 (due east).
+    pub fn regions(&self, k: usize) -> Vec<Region> {
+        let p = self.patch(k);
+        let z = [libm::sin(p.altitude[0]), libm::sin(p.altitude[1]).min(1.0)];
+        if p.azimuth[1] - p.azimuth[0] >= TAU {
+            return vec![Region::Band { z, phi: [0.0, TAU] }];
+        }
+        // Azimuth a (from north towards east) is φ = π/2 − a.
+        let (lo, hi) = (FRAC_PI_2 - p.azimuth[1], FRAC_PI_2 - p.azimuth[0]);
+        let (lo, hi) = (lo.rem_euclid(TAU), lo.rem_euclid(TAU) + (hi - lo));
+        if hi <= TAU {
+            vec![Region::Band { z, phi: [lo, hi] }]
+        } else {
+            vec![
+                Region::Band { z, phi: [lo, TAU] },
+                Region::Band {
+                    z,
+                    phi: [0.0, hi - TAU],
+                },
+            ]
+        }
+    }
+}
+
+/// A sky of constant luminance over each Reinhart patch and a uniform ground: a
+/// daylight coefficient's source (one patch, or the ground, at 1 cd/m²) or a whole
+/// sky vector (`annual`'s linearity checks). Its photons and next events are the
+/// distant sources' (`distant.rs`), so they come through portals and glazing as a
+/// sky's do.
+#[derive(Clone, Debug)]
+pub struct PatchSky {
+    pub patches: SkyPatches,
+    /// cd/m² per patch (`patches.len()` of them).
+    pub luminance: Vec<f64>,
+    pub ground_cdm2: f64,
+    pub portals: Vec<Portal>,
+    /// Whether next events aim at the portals: worth it for large sources (the ground,
+    /// a whole sky); a single patch is sampled directly, as the sun's cone is.
+    pub next_events_by_portals: bool,
+}
+
+impl PatchSky {
+    /// Patch `k` alone at 1 cd/m².
+    pub fn single(patches: &SkyPatches, k: usize, portals: &[Portal]) -> PatchSky {
+        let mut luminance = vec![0.0; patches.len()];
+        luminance[k] = 1.0;
+        PatchSky {
+            patches: patches.clone(),
+            luminance,
+            ground_cdm2: 0.0,
+            portals: portals.to_vec(),
+            next_events_by_portals: false,
+        }
+    }
+
+    /// The ground alone at 1 cd/m².
+    pub fn ground(patches: &SkyPatches, portals: &[Portal]) -> PatchSky {
+        PatchSky {
+            patches: patches.clone(),
+            luminance: vec![0.0; patches.len()],
+            ground_cdm2: 1.0,
+            portals: portals.to_vec(),
+            next_events_by_portals: true,
+        }
+    }
+
+    /// ∫ L dω over the sphere, cd/m²·sr.
+    fn radiant_integral(&self) -> f64 {
+        let sky: f64 = (self.luminance.iter().enumerate())
+            .map(|(k, l)| l * self.patches.patch(k).solid_angle_sr)
+            .sum();
+        sky + 2.0 * PI * self.ground_cdm2
+    }
+
+    fn table(&self) -> DistantTable {
+        let mut parts = Vec::new();
+        for (k, &l) in self.luminance.iter().enumerate() {
+            parts.extend(self.patches.regions(k).into_iter().map(|r| (r, l)));
+        }
+        parts.push((Region::ground(), self.ground_cdm2));
+        let (patches, luminance, ground) = (
+            self.patches.clone(),
+            self.luminance.clone(),
+            self.ground_cdm2,
+        );
+        let l = move |w: DVec3| match patches.index(w) {
+            Some(k) => luminance[k],
+            None => ground,
+        };
+        DistantTable::new(parts, Arc::new(l))
+    }
+}
+
+impl Light for PatchSky {
+    fn flux_lm(&self, sphere: &BoundingSphere) -> f64 {
+        PI * sphere.radius * sphere.radius * self.radiant_integral()
+    }
+
+    fn emitter(&self, origin: DVec3, sphere: &BoundingSphere) -> Arc<dyn Emitter> {
+        Arc::new(DistantEmitter {
+            table: self.table(),
+            center: sphere.center - origin,
+            radius: sphere.radius,
+            portals: self.portals.iter().map(|o| o.shifted(-origin)).collect(),
+            next_events_by_portals: self.next_events_by_portals,
+        })
+    }
+
+    fn describe(&self) -> String {
+        let lit = self.luminance.iter().filter(|&&l| l > 0.0).count();
+        format!(
+            "Reinhart MF:{} patch sky: {lit} of {} patches lit, ground {} cd/m²",
+            self.patches.mf,
+            self.patches.len(),
+            self.ground_cdm2
+        )
+    }
+}
+
 /// Gauss–Legendre nodes and weights on [0, 1], 8 points.
 const GAUSS8: [(f64, f64); 8] = {
     const X: [f64; 4] = [
@@ -295,6 +419,43 @@ mod tests {
             let mean = p.mean_over(k, &|w| 2.0 + 3.0 * w.z);
             assert!((mean - (2.0 + 1.5 * (s0 + s1))).abs() < 1e-12, "patch {k}");
         }
+    }
+
+    /// Each patch's regions hold exactly the directions `index` puts in it, and their
+    /// solid angles add up to the patch's.
+    #[test]
+    fn patch_regions_hold_their_patch() {
+        for mf in [1, 2] {
+            let p = SkyPatches::reinhart(mf, "t").unwrap();
+            for k in 0..p.len() {
+                let regions = p.regions(k);
+                let solid: f64 = regions.iter().map(Region::solid_angle_sr).sum();
+                assert!(
+                    (solid - p.patch(k).solid_angle_sr).abs() < 1e-12,
+                    "patch {k}"
+                );
+                for r in &regions {
+                    for (a, b) in [(0.5, 0.5), (0.01, 0.02), (0.99, 0.98)] {
+                        assert_eq!(p.index(r.direction(a, b)), Some(k), "MF {mf} patch {k}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// A patch sky's flux is πR²·∫L dω: its lit patches' solid angles and the ground's 2π.
+    #[test]
+    fn a_patch_sky_emits_its_patches_flux() {
+        let p = SkyPatches::reinhart(1, "t").unwrap();
+        let sphere = BoundingSphere {
+            center: DVec3::ZERO,
+            radius: 2.0,
+        };
+        let one = PatchSky::single(&p, 7, &[]);
+        let want = PI * 4.0 * p.patch(7).solid_angle_sr;
+        assert!((one.flux_lm(&sphere) - want).abs() < 1e-12 * want);
+        let ground = PatchSky::ground(&p, &[]);
+        assert!((ground.flux_lm(&sphere) - PI * 4.0 * TAU).abs() < 1e-9);
     }
 
     #[test]

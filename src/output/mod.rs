@@ -3,6 +3,7 @@
 //! rendered images (docs/outputs.md). A finished command writes them all through
 //! [`write_all`]; every file goes through [`write_atomic`].
 
+pub mod annual;
 pub mod image;
 pub mod indirect_map;
 pub mod observers;

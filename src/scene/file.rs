@@ -38,6 +38,8 @@ pub struct SceneFile {
     /// Openings daylight enters by: skies aim their next events at them.
     #[serde(default)]
     pub portals: Vec<PortalFile>,
+    /// A year of daylight (`scene::annual`).
+    pub annual: Option<toml::Value>,
 }
 
 /// A `[[portals]]` entry: a rectangle (`u`, `v` orthogonal) from `corner`.

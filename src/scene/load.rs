@@ -56,7 +56,13 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         None => 1.0,
     };
     let portals = portals(&raw.portals, origin)?;
-    let lights = lights(raw.lights, origin, base_dir, maintenance_factor, portals)?;
+    let lights = lights(
+        raw.lights,
+        origin,
+        base_dir,
+        maintenance_factor,
+        portals.clone(),
+    )?;
     let modelling_with: Vec<Option<String>> = (raw.receivers.iter())
         .map(|r| r.modelling_with.clone())
         .collect();
@@ -77,6 +83,13 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
             ..Simulation::default()
         },
     };
+    let annual = match raw.annual {
+        Some(value) => {
+            let table: super::annual::AnnualFile = crate::input::entry(value, origin, "annual")?;
+            Some(table.validate(&at("annual"), base_dir, &receivers)?)
+        }
+        None => None,
+    };
     let camera = match raw.camera {
         Some(c) => Some(camera(c, &at("camera"))?),
         None => None,
@@ -94,6 +107,8 @@ pub fn load_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
         simulation,
         camera,
         observers,
+        portals,
+        annual,
     })
 }
 

@@ -10,6 +10,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 pub mod adjacency;
+pub mod annual;
 pub mod file;
 pub mod fingerprint;
 pub mod grid;
@@ -445,6 +446,10 @@ pub struct Scene {
     /// The `[[observers]]` whose UGR the run reports (docs/ugr.md); each has a hidden
     /// receiver `observer:NAME` at the end of `receivers`.
     pub observers: Vec<Observer>,
+    /// The `[[portals]]` (world), which skies and suns made for the scene take too.
+    pub portals: Vec<crate::light::distant::Portal>,
+    /// The `[annual]` table, if any: what `luxtally annual` runs.
+    pub annual: Option<annual::Annual>,
 }
 
 /// The eye of `luxtally render` (world coordinates). Validated: `look_at` differs from

@@ -17,7 +17,7 @@ pub use map::{
     map_stats, mean_illuminance_sigma_lx, mean_illuminance_vov, triangle_face_illuminance_lx,
     triangle_illuminance_lx, triangle_rel_errors, MapKind, MapStats,
 };
-pub use receiver::{cell_values, receiver_stats, ReceiverStats};
+pub use receiver::{cell_estimates, cell_values, receiver_stats, CellEstimate, ReceiverStats};
 pub use reliability::{figure_of_merit, reliability, Reliability, BOUNCE_CAP_BIAS_SHARE};
 
 /// Relative error reported for a value of 0 whose σ is known: 100 %, so no relative

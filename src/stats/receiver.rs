@@ -52,6 +52,34 @@ pub fn cell_values(cells: &[CellSums], shape: [u32; 2], counts: Counts) -> (Vec<
     (values, sigmas)
 }
 
+/// A cell's estimate as daylight coefficients (the annual run) take it: the value and
+/// variance of the whole estimate and of its sampled direct part, in the receiver's unit
+/// (and its square), and the contributions scored.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CellEstimate {
+    pub value: f64,
+    pub var: f64,
+    pub direct: f64,
+    pub direct_var: f64,
+    pub hits: u64,
+}
+
+/// Every cell's [`CellEstimate`] (variances as [`cell_values`]' σ, with the pooled photon
+/// variance; where nothing scored, the value 0 with its neighbours' variance).
+pub fn cell_estimates(cells: &[CellSums], shape: [u32; 2], counts: Counts) -> Vec<CellEstimate> {
+    let (values, _, vars) = cell_values_and_parts(cells, shape, counts);
+    let unit2 = counts.unit * counts.unit;
+    (cells.iter().zip(values).zip(vars))
+        .map(|((c, value), (photon_var, direct_var))| CellEstimate {
+            value,
+            var: (photon_var + direct_var) * unit2,
+            direct: direct_part(c, counts).0 * counts.unit,
+            direct_var: direct_var * unit2,
+            hits: c.hits,
+        })
+        .collect()
+}
+
 /// [`cell_values`], with each cell's photon and direct variances as reported (in the
 /// score unit).
 fn cell_values_and_parts(
@@ -77,10 +105,12 @@ fn cell_values_and_parts(
         .enumerate()
         .with_min_len(MIN_CELLS_PER_TASK)
         .map(|(k, (c, p))| {
-            if c.hits == 0 {
-                return (0.0, if counts.dark { 0.0 } else { f64::NAN }, (0.0, 0.0));
-            }
             let pooled = neighbour_median(&own, nu, nv, k % nu, k / nu);
+            if c.hits == 0 {
+                // σ unknown; the variance its neighbours saw is what it should have drawn.
+                let var = if counts.dark { 0.0 } else { pooled };
+                return (0.0, if counts.dark { 0.0 } else { f64::NAN }, (var, 0.0));
+            }
             let (direct_value, direct_var) = direct_part(c, counts);
             let photon_var = pooled_variance(p.var, p.var_sd, pooled);
             (

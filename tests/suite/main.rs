@@ -20,6 +20,7 @@ mod common;
 
 mod physics {
     mod accuracy;
+    mod annual;
     mod bounce_cap;
     mod calibration;
     mod custom_light;

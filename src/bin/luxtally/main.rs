@@ -1,6 +1,7 @@
 //! The `luxtally` command line: parses, hands each command to its module, prints one
 //! line on error. The commands call the library, which does the work.
 
+mod annual;
 mod bench;
 #[cfg(feature = "mpi")]
 mod cluster;
@@ -63,6 +64,10 @@ enum Command {
         #[arg(long, value_name = "FILE", requires = "patches")]
         vector: Option<PathBuf>,
     },
+    /// A year of daylight from the scene's `[annual]` table: daylight coefficients per
+    /// sky patch and sun bin, every hour's illuminance with its σ, and DA, cDA, UDI,
+    /// sDA300/50 %, ASE1000,250 and EN 17037's levels with their intervals.
+    Annual(annual::AnnualArgs),
     /// Read an EPW weather file and print its site, hours, missing hours and annual
     /// radiation sums (not yet used by runs).
     Weather { file: PathBuf },
@@ -100,6 +105,7 @@ fn main() -> ExitCode {
             patches,
             vector,
         } => sky_command(&scene, patches, vector.as_deref()),
+        Command::Annual(args) => annual::command(args),
         Command::Weather { file } => {
             luxtally::weather::read_epw(&file).map(|w| print!("{}", w.summary()))
         }

@@ -1,0 +1,393 @@
+//! A year of daylight in one run (docs/daylight.md, *Annual daylight*): daylight
+//! coefficients from photons, then every hour's illuminance and the annual metrics
+//! with their uncertainty.
+//!
+//! Each source (the ground, each Reinhart patch of the sky at 1 cd/m², each sun bin at
+//! 1 lx normal) is traced by its own photons, seeded from (seed, source), as a run of
+//! its own over the one ray caster: the receivers' cells get each source's coefficient
+//! with its σ exactly as a run reports a cell, through portals, glazing and next events.
+//! Sources share no photons, so their estimates are independent and
+//! Var E(t) = Σₖ sₖ(t)² Var DCₖ holds exactly (rather than up to the small negative
+//! covariance that photons drawn among sources at random would leave). Photons are
+//! shared among sources in proportion to the light each brings over the year (every
+//! source at least one chunk), in rounds that double the total until the stop rule holds.
+
+pub mod metrics;
+pub mod sky_matrix;
+
+use crate::accel::RayCaster;
+use crate::error::{Error, Result};
+use crate::light::patches::PatchSky;
+use crate::light::sun::Sun;
+use crate::light::Light;
+use crate::run::{run_from, Progress, RunOptions, Start};
+use crate::scene::{Estimator, Scene, SceneLight};
+use crate::stats::{cell_estimates, CellEstimate};
+use crate::trace::CHUNK_PHOTONS;
+use metrics::{AnnualFigures, Hourly};
+use sky_matrix::SkyMatrix;
+use std::f64::consts::PI;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// What lights a daylight coefficient.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SourceKind {
+    Ground,
+    /// A sky patch (index into the sky matrix's patches).
+    Patch(usize),
+    /// A sun bin (index into [`SkyMatrix::suns`]).
+    Sun(usize),
+}
+
+/// One source: its light and its share of the photons.
+pub struct Source {
+    pub kind: SourceKind,
+    pub light: Arc<dyn Light>,
+    /// Its part of the year's light through the scene's disk (Σ over hours of its weight
+    /// times its flux at weight 1), as a fraction of all sources'.
+    pub share: f64,
+}
+
+/// The sources of `matrix`, with the scene's portals.
+pub fn sources(matrix: &SkyMatrix, portals: &[crate::light::distant::Portal]) -> Vec<Source> {
+    let n = matrix.patches.len();
+    let mut weight = vec![0.0; 1 + n + matrix.suns.len()];
+    for h in &matrix.hours {
+        weight[0] += h.ground_cdm2 * 2.0 * PI;
+        for (k, &l) in h.patches.iter().enumerate() {
+            weight[1 + k] += l as f64 * matrix.patches.patch(k).solid_angle_sr;
+        }
+        if let Some((b, e)) = h.sun {
+            weight[1 + n + b] += e;
+        }
+    }
+    let total: f64 = weight.iter().sum();
+    let mut out = Vec::with_capacity(weight.len());
+    out.push((
+        SourceKind::Ground,
+        Arc::new(PatchSky::ground(&matrix.patches, portals)) as Arc<dyn Light>,
+    ));
+    for k in 0..n {
+        out.push((
+            SourceKind::Patch(k),
+            Arc::new(PatchSky::single(&matrix.patches, k, portals)),
+        ));
+    }
+    for (b, &towards) in matrix.suns.iter().enumerate() {
+        let sun = Sun {
+            towards,
+            direct_normal_lx: 1.0,
+            ground_reflectance: 0.0,
+            portals: portals.to_vec(),
+        };
+        out.push((SourceKind::Sun(b), Arc::new(sun)));
+    }
+    (out.into_iter().zip(weight))
+        .map(|((kind, light), w)| Source {
+            kind,
+            light,
+            share: if total > 0.0 { w / total } else { 0.0 },
+        })
+        .collect()
+}
+
+/// Photons source `share` gets of `total`: its share, and at least one chunk.
+pub fn source_photons(share: f64, total: u64) -> u64 {
+    ((share * total as f64).ceil() as u64).max(CHUNK_PHOTONS)
+}
+
+/// Per source, per analysed receiver, per cell: the coefficient and its variance.
+pub type Coefficients = Vec<Vec<Vec<CellEstimate>>>;
+
+/// One round's state, for the progress line.
+pub struct Round {
+    pub index: u32,
+    pub photons: u64,
+    pub rays: u64,
+    pub elapsed_s: f64,
+    pub figures: AnnualFigures,
+}
+
+/// What an annual run hands to the outputs.
+pub struct AnnualResult {
+    pub matrix: SkyMatrix,
+    pub sources: Vec<SourceKind>,
+    pub coefficients: Coefficients,
+    pub hourly: Vec<Hourly>,
+    pub figures: AnnualFigures,
+    pub rounds: Vec<RoundLine>,
+    pub photons: u64,
+    pub rays: u64,
+    pub elapsed_s: f64,
+    pub stop_reason: &'static str,
+}
+
+/// A round as the summary lists it.
+#[derive(Clone, Debug)]
+pub struct RoundLine {
+    pub photons: u64,
+    pub elapsed_s: f64,
+    /// The widest sDA interval's half-width over the analysed receivers.
+    pub sda_halfwidth: f64,
+}
+
+/// Bytes an annual run keeps per source and cell, and per source and triangle (its
+/// record for the next round and its coefficients).
+const BYTES_PER_SOURCE_CELL: f64 = 200.0;
+const BYTES_PER_SOURCE_TRIANGLE: f64 = 64.0;
+
+/// Refuses a run whose coefficients would not fit in `free` bytes, one line.
+fn check_memory(scene: &Scene, sources: usize, free: Option<f64>) -> Result<()> {
+    let cells: usize = scene.receivers.iter().map(|r| r.cell_count() + 1).sum();
+    let triangles = scene.geometry.triangle_count();
+    let bytes = sources as f64
+        * (cells as f64 * BYTES_PER_SOURCE_CELL + triangles as f64 * BYTES_PER_SOURCE_TRIANGLE);
+    match free {
+        Some(free) if bytes > 0.8 * free => Err(Error::input(
+            format!("{}: annual", scene.path.display()),
+            format!(
+                "{sources} sources × {cells} cells and {triangles} triangles need ≈ {:.0} MB of \
+                 memory, {:.0} MB is available: use a coarser mf or sun_mf, or fewer receivers",
+                bytes * 1e-6,
+                free * 1e-6
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Runs the year: rounds of photons over every source until every analysed receiver's
+/// sDA interval is narrow enough, the photons run out or `interrupt` is set; `each` sees
+/// every round. `free_bytes`: the memory it may take (None: no limit).
+pub fn run(
+    scene: &Scene,
+    options: &RunOptions,
+    caster: &dyn RayCaster,
+    free_bytes: Option<f64>,
+    interrupt: &AtomicBool,
+    each: &mut dyn FnMut(&Round),
+) -> Result<AnnualResult> {
+    let annual = scene
+        .annual
+        .as_ref()
+        .ok_or_else(|| Error::input(scene.path.display().to_string(), "has no [annual] table"))?;
+    let weather = crate::weather::read_epw(&annual.weather)?;
+    let matrix = SkyMatrix::new(&weather, annual)?;
+    let sources = sources(&matrix, &scene.portals);
+    check_memory(scene, sources.len(), free_bytes)?;
+    let mut base = scene.clone();
+    base.requirements.clear();
+    base.daylight_factor = None;
+    let mut options = options.clone();
+    options.estimator = Some(Estimator::NextEvent);
+    let clock = Instant::now();
+    let mut records: Vec<Option<Progress>> = (0..sources.len()).map(|_| None).collect();
+    let mut coefficients: Coefficients = vec![Vec::new(); sources.len()];
+    let mut rounds = Vec::new();
+    let mut total = annual.photons;
+    for index in 0.. {
+        trace_round(
+            &mut base,
+            &options,
+            caster,
+            &sources,
+            total,
+            &mut records,
+            &mut coefficients,
+            interrupt,
+        )?;
+        let hourly = metrics::hourly_all(&matrix, &sources, &coefficients, annual.receivers.len());
+        let figures = AnnualFigures::new(&matrix, &hourly, scene, annual);
+        let photons: u64 = records.iter().flatten().map(|p| p.tallies.photons).sum();
+        let rays: u64 = records
+            .iter()
+            .flatten()
+            .map(|p| p.tallies.rays + p.tallies.direct_rays)
+            .sum();
+        let elapsed_s = clock.elapsed().as_secs_f64();
+        let round = Round {
+            index,
+            photons,
+            rays,
+            elapsed_s,
+            figures,
+        };
+        each(&round);
+        rounds.push(RoundLine {
+            photons,
+            elapsed_s,
+            sda_halfwidth: round.figures.widest_sda_halfwidth(),
+        });
+        let reached = annual
+            .sda_halfwidth
+            .is_some_and(|h| round.figures.widest_sda_halfwidth() <= h);
+        let stop_reason = if interrupt.load(Ordering::Relaxed) {
+            Some("interrupted")
+        } else if reached {
+            Some("sda_halfwidth")
+        } else if annual.sda_halfwidth.is_none() || total >= annual.max_photons {
+            Some("photons")
+        } else {
+            None
+        };
+        if let Some(stop_reason) = stop_reason {
+            return Ok(AnnualResult {
+                matrix,
+                sources: sources.iter().map(|s| s.kind).collect(),
+                coefficients,
+                hourly,
+                figures: round.figures,
+                rounds,
+                photons,
+                rays,
+                elapsed_s,
+                stop_reason,
+            });
+        }
+        total = total.saturating_mul(2).min(annual.max_photons);
+    }
+    unreachable!("the rounds end by returning")
+}
+
+/// Traces every source up to its share of `total` photons (going on from its record)
+/// and refreshes its coefficients.
+#[allow(clippy::too_many_arguments)]
+fn trace_round(
+    base: &mut Scene,
+    options: &RunOptions,
+    caster: &dyn RayCaster,
+    sources: &[Source],
+    total: u64,
+    records: &mut [Option<Progress>],
+    coefficients: &mut Coefficients,
+    interrupt: &AtomicBool,
+) -> Result<()> {
+    let annual = base.annual.clone().expect("checked by run");
+    for (k, source) in sources.iter().enumerate() {
+        if interrupt.load(Ordering::Relaxed) {
+            break;
+        }
+        let want = source_photons(source.share, total);
+        if records[k]
+            .as_ref()
+            .is_some_and(|p| p.tallies.photons >= want)
+        {
+            continue;
+        }
+        base.lights = vec![SceneLight {
+            label: format!("annual source {k}"),
+            kind: source.light.clone(),
+        }];
+        let mut opts = options.clone();
+        opts.seed = crate::rng::sub_seed(options.seed, k as u64);
+        opts.stop = crate::criteria::StopCriteria {
+            photons: Some(want),
+            ..Default::default()
+        };
+        let start = Start {
+            resumed: records[k].take(),
+            ..Start::default()
+        };
+        let result = run_from(
+            base,
+            &opts,
+            caster,
+            Instant::now(),
+            interrupt,
+            &mut (),
+            start,
+        )?;
+        let counts = result.progress.tallies.counts();
+        coefficients[k] = (annual.receivers.iter())
+            .map(|&r| {
+                let cells = result.progress.tallies.receiver_cells(&base.receivers, r);
+                cell_estimates(cells, base.receivers[r].cells, counts)
+            })
+            .collect();
+        records[k] = Some(result.progress);
+    }
+    Ok(())
+}
+
+/// The photons a target half-width `target` needs from a round at `photons` whose
+/// widest half-width is `now`: intervals narrow as 1/√N.
+pub fn forecast_photons(photons: u64, now: f64, target: f64) -> f64 {
+    photons as f64 * (now / target) * (now / target)
+}
+
+/// One progress line per round.
+pub fn round_line(round: &Round) -> String {
+    let widest = round.figures.widest_sda_halfwidth();
+    let mut line = format!(
+        "round {}: {} photons, {:.1} Mrays in {:.1} s; widest sDA interval ±{:.2} % of the area",
+        round.index,
+        round.photons,
+        round.rays as f64 * 1e-6,
+        round.elapsed_s,
+        100.0 * widest
+    );
+    for r in &round.figures.receivers {
+        line += &format!(
+            "; {} sDA {:.1} % ({:.1}–{:.1} %)",
+            r.name,
+            100.0 * r.sda.value,
+            100.0 * r.sda.low,
+            100.0 * r.sda.high
+        );
+    }
+    line
+}
+
+/// What `luxtally annual` prints at the end.
+pub fn result_text(scene: &Scene, result: &AnnualResult, out: &std::path::Path) -> String {
+    let m = &result.matrix;
+    let mut text = format!(
+        "{}: {} records ({} lit, {} occupied), {} sky patches + ground, {} sun bins; {} photons, {:.1} Mrays in {:.1} s, stopped on {}; results in {}\n",
+        scene.name,
+        m.records,
+        m.hours.len(),
+        m.occupied_records,
+        m.patches.len(),
+        m.suns.len(),
+        result.photons,
+        result.rays as f64 * 1e-6,
+        result.elapsed_s,
+        result.stop_reason,
+        out.display()
+    );
+    for w in &m.warnings {
+        text += &format!("  warning: {w}\n");
+    }
+    let untraced = result.coefficients.iter().filter(|c| c.is_empty()).count();
+    if untraced > 0 {
+        text += &format!("  incomplete: {untraced} sources were not traced (interrupted): the figures miss their light\n");
+    }
+    for r in &result.figures.receivers {
+        let pct = |i: &metrics::Interval| {
+            format!(
+                "{:.1} % (95 % {:.1}–{:.1} %)",
+                100.0 * i.value,
+                100.0 * i.low,
+                100.0 * i.high
+            )
+        };
+        text += &format!(
+            "  receiver {}: sDA300/50 % {}, LEED v4.1 points {}–{}; ASE1000,250 {}; blinds closed {} of occupied hours\n",
+            r.name,
+            pct(&r.sda),
+            r.leed_points[0],
+            r.leed_points[1],
+            pct(&r.ase),
+            pct(&r.blinds_hours)
+        );
+        for (name, fraction, verdict) in &r.en17037 {
+            text += &format!(
+                "    EN 17037 {name} level: {verdict} ({} of daylight hours)\n",
+                pct(fraction)
+            );
+        }
+    }
+    text
+}

@@ -1,0 +1,226 @@
+//! Annual daylight (`luxtally::annual`): daylight coefficients times the hours' sky
+//! vectors against direct runs under the same skies, and the annual figures' own checks.
+
+use luxtally::annual::{self, AnnualResult};
+use luxtally::light::patches::PatchSky;
+use luxtally::light::sun::Sun;
+use luxtally::run::{run, RunOptions};
+use luxtally::scene::{Estimator, Scene, SceneLight};
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+
+/// One June day at Golden, Colorado: dark but for three hours — a low morning sun
+/// (stamp 6), an overcast hour (10) and a clear noon with the sun (13).
+fn june_day() -> String {
+    let mut t = String::from(
+        "LOCATION,Golden,CO,USA,test,724666,39.74,-105.18,-7.0,1829.0\nDESIGN CONDITIONS,0\n\
+         TYPICAL/EXTREME PERIODS,0\nGROUND TEMPERATURES,0\nHOLIDAYS/DAYLIGHT SAVINGS,No,0,0,0\n\
+         COMMENTS 1,test\nCOMMENTS 2,test\nDATA PERIODS,1,1,Data,Sunday, 6/21, 6/21\n",
+    );
+    for h in 1..=24 {
+        let (dni, dhi) = match h {
+            6 => (300, 40),
+            10 => (0, 250),
+            13 => (850, 90),
+            _ => (0, 0),
+        };
+        t += &format!(
+            "1990,6,21,{h},60,?9?9?9?9E0?9?9?9*9*9?9*9*9*9*9*9*9*9*9*9*_*9*9*9*9*9,20.0,5.0,40,81000,0,0,300,\
+             {},{dni},{dhi},999999,999999,999999,9999,180,3.0,5,5,20.0,77777,9,999999999,10,0.1,0,88,0.2,0,0\n",
+            dni / 2 + dhi
+        );
+    }
+    t
+}
+
+/// The bundled daylit office with a coarse grid and an `[annual]` table over `epw`.
+fn temp_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("luxtally_{name}_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn annual_scene(dir: &std::path::Path, epw: &str, table: &str) -> Scene {
+    std::fs::write(dir.join("w.epw"), epw).unwrap();
+    let text = std::fs::read_to_string("scenes/daylit_office.toml")
+        .unwrap()
+        .replace("cells = [12, 20]", "cells = [4, 6]");
+    let text = format!("{text}\n[annual]\nweather = \"w.epw\"\n{table}\n");
+    luxtally::scene::load_str(&text, dir, "annual_test.toml").unwrap()
+}
+
+fn annual_run(scene: &Scene, seed: u64) -> AnnualResult {
+    let mut options = RunOptions::from_scene(scene);
+    options.seed = seed;
+    let caster =
+        luxtally::accel::build_with(options.backend, options.bvh, &scene.geometry).unwrap();
+    annual::run(
+        scene,
+        &options,
+        caster.as_ref(),
+        None,
+        &AtomicBool::new(false),
+        &mut |_| {},
+    )
+    .unwrap()
+}
+
+/// Cell values and σ of a run of `scene` under `lights` alone.
+fn direct_run(
+    scene: &Scene,
+    lights: Vec<Arc<dyn luxtally::light::Light>>,
+    photons: u64,
+    seed: u64,
+) -> (Vec<f64>, Vec<f64>) {
+    let mut scene = scene.clone();
+    scene.daylight_factor = None;
+    scene.lights = (lights.into_iter().enumerate())
+        .map(|(i, kind)| SceneLight {
+            label: format!("lights[{i}]"),
+            kind,
+        })
+        .collect();
+    let mut options = RunOptions::with_photons(&scene, photons);
+    options.seed = seed;
+    options.estimator = Some(Estimator::NextEvent);
+    let result = run(&scene, &options, &AtomicBool::new(false), &mut ()).unwrap();
+    let tallies = &result.progress.tallies;
+    let cells = tallies.receiver_cells(&scene.receivers, 0);
+    luxtally::stats::cell_values(cells, scene.receivers[0].cells, tallies.counts())
+}
+
+/// The hour's sky as one light (patches at their mean luminance, the ground) and its sun.
+fn hour_lights(
+    scene: &Scene,
+    result: &AnnualResult,
+    t: usize,
+) -> Vec<Arc<dyn luxtally::light::Light>> {
+    let m = &result.matrix;
+    let h = &m.hours[t];
+    let sky = PatchSky {
+        patches: m.patches.clone(),
+        luminance: h.patches.iter().map(|&l| l as f64).collect(),
+        ground_cdm2: h.ground_cdm2,
+        portals: scene.portals.clone(),
+        next_events_by_portals: true,
+    };
+    let mut lights: Vec<Arc<dyn luxtally::light::Light>> = vec![Arc::new(sky)];
+    if let Some((b, en)) = h.sun {
+        lights.push(Arc::new(Sun {
+            towards: m.suns[b],
+            direct_normal_lx: en,
+            ground_reflectance: 0.0,
+            portals: scene.portals.clone(),
+        }));
+    }
+    lights
+}
+
+/// Linearity: E(t) = Σₖ sₖ(t)·DCₖ from one annual run matches a run under hour t's sky
+/// and sun, cell by cell, within the two runs' σ (low sun, overcast, clear with sun;
+/// each hour's sun its own, `sun_mf = 0`). What is compared is exactly linear: the sky
+/// of the direct runs is the patch-wise constant sky the coefficients assume.
+#[test]
+fn daylight_coefficients_times_sky_vectors_match_direct_runs() {
+    let dir = temp_dir("annual_linearity");
+    let scene = annual_scene(
+        &dir,
+        &june_day(),
+        "mf = 1\nsun_mf = 0\nphotons = 2_000_000\noccupied_hours = [0, 24]",
+    );
+    let result = annual_run(&scene, 11);
+    assert_eq!(result.matrix.hours.len(), 3, "three lit hours");
+    let h = &result.hourly[0];
+    let mut z2 = Vec::new();
+    for t in 0..3 {
+        let (values, sigmas) = direct_run(
+            &scene,
+            hour_lights(&scene, &result, t),
+            1_000_000,
+            100 + t as u64,
+        );
+        for c in 0..h.cells {
+            let (e, s) = (h.e[t * h.cells + c] as f64, h.sigma[t * h.cells + c] as f64);
+            let sd = (s * s + sigmas[c] * sigmas[c]).sqrt();
+            assert!(
+                e > 0.0 && values[c] > 0.0,
+                "hour {t} cell {c}: {e} against {}",
+                values[c]
+            );
+            let z = (e - values[c]) / sd;
+            assert!(
+                z.abs() < 5.0,
+                "hour {t} cell {c}: {e:.2} ± {s:.2} lx against {:.2} ± {:.2}: z {z:.2}",
+                values[c],
+                sigmas[c]
+            );
+            z2.push(z * z);
+        }
+    }
+    let rms = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
+    eprintln!("linearity z-RMS {rms:.3} over {} cell-hours", z2.len());
+    assert!(
+        (0.5..1.6).contains(&rms),
+        "z-RMS {rms:.3} over {} cell-hours",
+        z2.len()
+    );
+}
+
+/// The same seed gives the same bits on one thread and on two.
+#[test]
+fn an_annual_run_gives_the_same_bits_on_any_threads() {
+    let dir = temp_dir("annual_threads");
+    let scene = annual_scene(&dir, &june_day(), "mf = 1\nsun_mf = 0\nphotons = 200_000");
+    let mut options = RunOptions::from_scene(&scene);
+    let caster =
+        luxtally::accel::build_with(options.backend, options.bvh, &scene.geometry).unwrap();
+    let mut runs = Vec::new();
+    for threads in [1, 2] {
+        options.threads = threads;
+        let r = annual::run(
+            &scene,
+            &options,
+            caster.as_ref(),
+            None,
+            &AtomicBool::new(false),
+            &mut |_| {},
+        )
+        .unwrap();
+        runs.push(
+            r.hourly[0]
+                .e
+                .iter()
+                .chain(&r.hourly[0].sigma)
+                .map(|x| x.to_bits())
+                .collect::<Vec<_>>(),
+        );
+    }
+    assert_eq!(runs[0], runs[1]);
+}
+
+#[test]
+fn patch_and_sun_positions_follow_the_weather() {
+    let dir = temp_dir("annual_positions");
+    let scene = annual_scene(&dir, &june_day(), "mf = 1\nsun_mf = 0\nphotons = 200_000");
+    let result = annual_run(&scene, 1);
+    let m = &result.matrix;
+    // Noon sun (stamp 13: 12:30 MST) high in the south; the morning sun low in the east.
+    let noon = m.suns[m.hours[2].sun.unwrap().0];
+    let morning = m.suns[m.hours[0].sun.unwrap().0];
+    assert!(
+        noon.z > 0.95 * libm::sin(70f64.to_radians()) && noon.y < 0.0,
+        "{noon:?}"
+    );
+    assert!(
+        morning.z < libm::sin(15f64.to_radians()) && morning.x > 0.5,
+        "{morning:?}"
+    );
+    // The overcast hour has no sun; its patches integrate to its diffuse horizontal
+    // illuminance within the patch discretisation.
+    assert!(m.hours[1].sun.is_none());
+    let e: f64 = (0..m.patches.len())
+        .map(|k| m.hours[1].patches[k] as f64 * m.patches.cos_integral(k))
+        .sum();
+    let ground = m.hours[1].ground_cdm2 * std::f64::consts::PI / 0.2;
+    assert!((e / ground - 1.0).abs() < 0.01, "{e} against {ground}");
+}
