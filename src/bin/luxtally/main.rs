@@ -63,8 +63,8 @@ enum Command {
         #[arg(long, value_name = "FILE", requires = "patches")]
         vector: Option<PathBuf>,
     },
-    /// Read an EPW weather file and print its site, hours, missing hours and annual
-    /// radiation sums (not yet used by runs).
+    /// Read a weather file, EPW or WEA by its extension (.epw, .wea), and print its site,
+    /// hours, missing hours and annual radiation sums (not yet used by runs).
     Weather { file: PathBuf },
     /// List the EN 12464-1 task types a requirement's `task` can name, with their values.
     Tasks,
@@ -101,7 +101,7 @@ fn main() -> ExitCode {
             vector,
         } => sky_command(&scene, patches, vector.as_deref()),
         Command::Weather { file } => {
-            luxtally::weather::read_epw(&file).map(|w| print!("{}", w.summary()))
+            luxtally::weather::read_weather(&file).map(|w| print!("{}", w.summary()))
         }
         Command::Tasks => {
             print!("{}", luxtally::scene::tasks::table_text());
