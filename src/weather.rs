@@ -663,3 +663,47 @@ impl Weather {
         text
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(text: &str) -> WeatherHour {
+        wea_row(text, 7, WeaUnits::Irradiance, "t.wea").unwrap()
+    }
+
+    /// t → the interval (h − 1, h] holding it, t = 0 in the first; the midpoint is
+    /// EPW's convention (no stated time), any other t is kept for the sun.
+    #[test]
+    fn wea_times_map_to_their_interval() {
+        for (t, hour, stated) in [
+            ("0", 1, Some(0.0)),
+            ("0.5", 1, None),
+            ("1", 1, Some(1.0)),
+            ("1.0001", 2, Some(1.0001)),
+            ("11.5", 12, None),
+            ("23.99", 24, Some(23.99)),
+            ("24", 24, Some(24.0)),
+        ] {
+            let h = row(&format!("6 21 {t} 800 100"));
+            assert_eq!((h.hour, h.stated_time_h), (hour, stated), "t = {t}");
+            assert_eq!(h.sun_time_h(), stated.unwrap_or(hour as f64 - 0.5));
+        }
+        assert_eq!(
+            row("2 29 12.5 0 0").day,
+            29,
+            "a WEA has no year: 29 February is a day"
+        );
+    }
+
+    #[test]
+    fn wea_signs_become_east_positive() {
+        let text = "place X\nlatitude -33.9\nlongitude -151.2\ntime_zone -150\n\
+                    site_elevation 3\nweather_data_file_units 1\n1 1 12.5 800 100\n";
+        let l = parse_wea(text, "t.wea").unwrap().location;
+        assert_eq!(
+            (l.latitude_deg, l.longitude_deg, l.timezone_h),
+            (-33.9, 151.2, 10.0)
+        );
+    }
+}

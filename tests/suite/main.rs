@@ -58,6 +58,7 @@ mod io {
     mod photometry;
     mod scene_loading;
     mod scene_paths;
+    mod weather;
 }
 
 mod cli {
