@@ -20,7 +20,7 @@
 //! it (no import cycles): `error`, `rng`, `sampling`, `raster` (bitmap font, canvas, PNG
 //! encoder, palettes, quantile), `criteria` (the stop criteria of the scene file, the
 //! command line and the run), `input` (scene-file entries read with their key path,
-//! value checks), `weather` (EPW weather files) → `photometry` → `light` → `surface` → `scene` → `accel` → `tally` →
+//! value checks), `weather` (EPW and WEA weather files) → `photometry` → `light` → `surface` → `scene` → `accel` → `tally` →
 //! `trace` → `stats` → `distributed` → `run` → `checkpoint` → `annual` → `output` → `render` →
 //! `limits` → `fixtures`. docs/architecture.md has the whole data path.
 

@@ -173,7 +173,7 @@ pub fn run(
         .annual
         .as_ref()
         .ok_or_else(|| Error::input(scene.path.display().to_string(), "has no [annual] table"))?;
-    let weather = crate::weather::read_epw(&annual.weather)?;
+    let weather = crate::weather::read_weather(&annual.weather)?;
     let matrix = SkyMatrix::new(&weather, annual)?;
     let sources = sources(&matrix, &scene.portals);
     check_memory(scene, sources.len(), free_bytes)?;

@@ -59,6 +59,7 @@ mod io {
     mod photometry;
     mod scene_loading;
     mod scene_paths;
+    mod weather;
 }
 
 mod cli {

@@ -68,8 +68,8 @@ enum Command {
     /// sky patch and sun bin, every hour's illuminance with its σ, and DA, cDA, UDI,
     /// sDA300/50 %, ASE1000,250 and EN 17037's levels with their intervals.
     Annual(annual::AnnualArgs),
-    /// Read an EPW weather file and print its site, hours, missing hours and annual
-    /// radiation sums (not yet used by runs).
+    /// Read a weather file, EPW or WEA by its extension (.epw, .wea), and print its site,
+    /// hours, missing hours and annual radiation sums.
     Weather { file: PathBuf },
     /// List the EN 12464-1 task types a requirement's `task` can name, with their values.
     Tasks,
@@ -107,7 +107,7 @@ fn main() -> ExitCode {
         } => sky_command(&scene, patches, vector.as_deref()),
         Command::Annual(args) => annual::command(args),
         Command::Weather { file } => {
-            luxtally::weather::read_epw(&file).map(|w| print!("{}", w.summary()))
+            luxtally::weather::read_weather(&file).map(|w| print!("{}", w.summary()))
         }
         Command::Tasks => {
             print!("{}", luxtally::scene::tasks::table_text());

@@ -323,33 +323,8 @@ fn the_date_fixes_the_day_of_year() {
 
 // ---- EPW -------------------------------------------------------------------------
 
-/// A small EPW: LOCATION, 7 more header lines, `days` × 24 records from 1 January
-/// with a simple daily course of DNI/DHI.
-fn epw(location: &str, days: usize) -> String {
-    let mut t = format!(
-        "{location}\nDESIGN CONDITIONS,0\nTYPICAL/EXTREME PERIODS,0\nGROUND TEMPERATURES,0\n\
-                         HOLIDAYS/DAYLIGHT SAVINGS,No,0,0,0\nCOMMENTS 1,test\nCOMMENTS 2,test\n\
-                         DATA PERIODS,1,1,Data,Sunday, 1/ 1,{:>2}/{:>2}\n",
-        1, days
-    );
-    for d in 1..=days {
-        for h in 1..=24 {
-            let up = (8..=16).contains(&h);
-            let (dni, dhi) = if up { (100 * (h - 7), 50 + h) } else { (0, 0) };
-            t += &format!(
-                "2026,1,{d},{h},60,?9?9?9?9E0?9?9?9*9*9?9*9*9*9*9*9*9*9*9*9*_*9*9*9*9*9,2.0,-1.5,80,101325,0,0,300,\
-                 {},{dni},{dhi},{},{},{},9999,180,3.0,5,5,20.0,77777,9,999999999,10,0.1,0,88,0.2,0,0\n",
-                dni / 2 + dhi,
-                100 * (dni / 2 + dhi),
-                100 * dni,
-                110 * dhi
-            );
-        }
-    }
-    t
-}
-
-const BERLIN: &str = "LOCATION,Berlin,BE,DEU,test,103840,52.47,13.40,1.0,49.0";
+// `epw` and `BERLIN` (a small EPW's text) are in `common`, shared with io::weather's
+// WEA tests.
 
 #[test]
 fn a_small_epw_is_read_with_its_site_and_hours() {
