@@ -105,9 +105,13 @@ pub type Coefficients = Vec<Vec<Vec<CellEstimate>>>;
 pub struct Round {
     pub index: u32,
     pub photons: u64,
+    /// Rays of the photons, and of the receivers' sampled direct light.
     pub rays: u64,
+    pub direct_rays: u64,
     pub elapsed_s: f64,
     pub figures: AnnualFigures,
+    /// The sDA half-width the run stops at, if any.
+    pub target: Option<f64>,
 }
 
 /// What an annual run hands to the outputs.
@@ -120,6 +124,7 @@ pub struct AnnualResult {
     pub rounds: Vec<RoundLine>,
     pub photons: u64,
     pub rays: u64,
+    pub direct_rays: u64,
     pub elapsed_s: f64,
     pub stop_reason: &'static str,
 }
@@ -201,18 +206,17 @@ pub fn run(
         let hourly = metrics::hourly_all(&matrix, &sources, &coefficients, annual.receivers.len());
         let figures = AnnualFigures::new(&matrix, &hourly, scene, annual);
         let photons: u64 = records.iter().flatten().map(|p| p.tallies.photons).sum();
-        let rays: u64 = records
-            .iter()
-            .flatten()
-            .map(|p| p.tallies.rays + p.tallies.direct_rays)
-            .sum();
+        let rays: u64 = records.iter().flatten().map(|p| p.tallies.rays).sum();
+        let direct_rays: u64 = records.iter().flatten().map(|p| p.tallies.direct_rays).sum();
         let elapsed_s = clock.elapsed().as_secs_f64();
         let round = Round {
             index,
             photons,
             rays,
+            direct_rays,
             elapsed_s,
             figures,
+            target: annual.sda_halfwidth,
         };
         each(&round);
         rounds.push(RoundLine {
@@ -242,6 +246,7 @@ pub fn run(
                 rounds,
                 photons,
                 rays,
+                direct_rays,
                 elapsed_s,
                 stop_reason,
             });
@@ -321,13 +326,23 @@ pub fn forecast_photons(photons: u64, now: f64, target: f64) -> f64 {
 pub fn round_line(round: &Round) -> String {
     let widest = round.figures.widest_sda_halfwidth();
     let mut line = format!(
-        "round {}: {} photons, {:.1} Mrays in {:.1} s; widest sDA interval ±{:.2} % of the area",
+        "round {}: {} photons, {:.1} + {:.1} Mrays (photons + direct light) in {:.1} s; widest \
+         sDA interval ±{:.2} % of the area",
         round.index,
         round.photons,
         round.rays as f64 * 1e-6,
+        round.direct_rays as f64 * 1e-6,
         round.elapsed_s,
         100.0 * widest
     );
+    if let Some(target) = round.target.filter(|&t| widest > t) {
+        let photons = forecast_photons(round.photons, widest, target);
+        let seconds = round.elapsed_s / round.photons as f64 * photons;
+        line += &format!(
+            " (target ±{:.2} %: ≈ {photons:.3e} photons, ≈ {seconds:.0} s in all)",
+            100.0 * target
+        );
+    }
     for r in &round.figures.receivers {
         line += &format!(
             "; {} sDA {:.1} % ({:.1}–{:.1} %)",

@@ -33,6 +33,33 @@ fn june_day() -> String {
     t
 }
 
+/// Two weeks of March at Golden: clear days with the sun and overcast days in turn, each
+/// with a daily course, so that the grid's cells cross 300 lx on many hours.
+fn march_fortnight() -> String {
+    let mut t = String::from(
+        "LOCATION,Golden,CO,USA,test,724666,39.74,-105.18,-7.0,1829.0\nDESIGN CONDITIONS,0\n\
+         TYPICAL/EXTREME PERIODS,0\nGROUND TEMPERATURES,0\nHOLIDAYS/DAYLIGHT SAVINGS,No,0,0,0\n\
+         COMMENTS 1,test\nCOMMENTS 2,test\nDATA PERIODS,1,1,Data,Sunday, 3/ 1, 3/14\n",
+    );
+    for d in 1..=14 {
+        for h in 1..=24 {
+            let up = (8..=18).contains(&h);
+            let shape = if up { ((h - 7) * (19 - h)) as f64 / 36.0 } else { 0.0 };
+            let (dni, dhi) = match (up, d % 2) {
+                (false, _) => (0.0, 0.0),
+                (true, 1) => (700.0 * shape.sqrt(), 60.0 + 30.0 * shape),
+                (true, _) => (0.0, 40.0 + 130.0 * shape),
+            };
+            t += &format!(
+                "1990,3,{d},{h},60,?9?9?9?9E0?9?9?9*9*9?9*9*9*9*9*9*9*9*9*9*_*9*9*9*9*9,5.0,-5.0,40,81000,0,0,300,\
+                 {:.0},{dni:.0},{dhi:.0},999999,999999,999999,9999,180,3.0,5,5,20.0,77777,9,999999999,10,0.1,0,88,0.2,0,0\n",
+                dni / 2.0 + dhi
+            );
+        }
+    }
+    t
+}
+
 /// The bundled daylit office with a coarse grid and an `[annual]` table over `epw`.
 fn temp_dir(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("luxtally_{name}_{}", std::process::id()));
@@ -223,4 +250,59 @@ fn patch_and_sun_positions_follow_the_weather() {
         .sum();
     let ground = m.hours[1].ground_cdm2 * std::f64::consts::PI / 0.2;
     assert!((e / ground - 1.0).abs() < 0.01, "{e} against {ground}");
+}
+
+/// Coverage: over seeds, each cell's DA300 and ASE-hours intervals and the receiver's sDA
+/// interval (95 %, comonotone model) hold the figure a run with 32 times the photons
+/// gives; the hourly illuminance's σ is calibrated against it (z-RMS). The model errs
+/// on the wide side (see `annual::metrics`), so coverage must be at least 95 % within
+/// three binomial σ.
+#[test]
+fn annual_intervals_cover_a_precise_run() {
+    let dir = temp_dir("annual_coverage");
+    let table = |photons: u64| format!("mf = 1\nsun_mf = 0\nphotons = {photons}");
+    let reference_scene = annual_scene(&dir, &march_fortnight(), &table(32 << 20));
+    let reference = annual_run(&reference_scene, 999);
+    let truth = &reference.figures.receivers[0];
+    let scene = annual_scene(&dir, &march_fortnight(), &table(1 << 20));
+    let (mut cells, mut covered, mut sda_covered, mut ase_covered, mut z2) = (0, 0, 0, 0, Vec::new());
+    let mut widths = [0.0; 2];
+    let seeds = 16;
+    for seed in 0..seeds {
+        let r = annual_run(&scene, seed);
+        let f = &r.figures.receivers[0];
+        for (c, t) in f.cells.iter().zip(&truth.cells) {
+            cells += 1;
+            covered += (c.da.low <= t.da.value && t.da.value <= c.da.high) as usize;
+            ase_covered += (c.ase_hours.low <= t.ase_hours.value && t.ase_hours.value <= c.ase_hours.high) as usize;
+            widths[0] += c.da.halfwidth();
+        }
+        sda_covered += (f.sda.low <= truth.sda.value && truth.sda.value <= f.sda.high) as usize;
+        let (h, href) = (&r.hourly[0], &reference.hourly[0]);
+        for k in 0..h.e.len() {
+            let sd = ((h.sigma[k] as f64).powi(2) + (href.sigma[k] as f64).powi(2)).sqrt();
+            if sd > 0.0 {
+                z2.push(((h.e[k] - href.e[k]) as f64 / sd).powi(2));
+            }
+        }
+    }
+    widths[1] = truth.cells.iter().map(|c| c.da.halfwidth()).sum::<f64>() * seeds as f64;
+    let floor = |n: usize| 0.95 - 3.0 * (0.05 * 0.95 / n as f64).sqrt();
+    let share = covered as f64 / cells as f64;
+    eprintln!(
+        "DA cells covered {share:.3} of {cells}; sDA {sda_covered}/{seeds}; ASE hours {ase_covered}/{cells}; \
+         sDA {:.3}; mean DA half-width {:.4}, at 32 × the photons {:.4}",
+        truth.sda.value,
+        widths[0] / cells as f64,
+        widths[1] / cells as f64
+    );
+    // Wide enough to cover, yet narrowing with photons as 1/√N would (√32 ≈ 5.7).
+    assert!(widths[1] < 0.5 * widths[0], "DA half-widths {widths:?}");
+    assert!(share >= floor(cells), "DA intervals cover {share:.3} of {cells} cells");
+    assert!(sda_covered as f64 / seeds as f64 >= floor(seeds as usize), "sDA covered {sda_covered} of {seeds}");
+    let ase_share = ase_covered as f64 / cells as f64;
+    assert!(ase_share >= floor(cells), "ASE hours' intervals cover {ase_share:.3} of {cells} cells");
+    let rms = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
+    eprintln!("hourly z-RMS {rms:.3} over {} cell-hours", z2.len());
+    assert!((0.8..1.25).contains(&rms), "hourly z-RMS {rms:.3}");
 }
