@@ -207,7 +207,11 @@ pub fn run(
         let figures = AnnualFigures::new(&matrix, &hourly, scene, annual);
         let photons: u64 = records.iter().flatten().map(|p| p.tallies.photons).sum();
         let rays: u64 = records.iter().flatten().map(|p| p.tallies.rays).sum();
-        let direct_rays: u64 = records.iter().flatten().map(|p| p.tallies.direct_rays).sum();
+        let direct_rays: u64 = records
+            .iter()
+            .flatten()
+            .map(|p| p.tallies.direct_rays)
+            .sum();
         let elapsed_s = clock.elapsed().as_secs_f64();
         let round = Round {
             index,

@@ -1,7 +1,8 @@
 //! An annual run's files (docs/daylight.md, *Annual outputs*): annual.json (settings,
 //! warnings, rounds and every receiver's figures with their intervals and verdicts),
 //! per receiver a CSV of its cells' figures, a CSV of its hours and the hourly
-//! illuminance of every cell as a compact binary, streamed record by record.
+//! illuminance of every cell as a compact binary, streamed record by record; annual.html
+//! with the verdicts, the day × hour maps of each receiver's mean and the metric maps.
 
 use crate::annual::metrics::{Hourly, Interval, ReceiverFigures};
 use crate::annual::AnnualResult;
@@ -73,6 +74,7 @@ pub fn write_annual(out: &Path, scene: &Scene, result: &AnnualResult) -> Result<
     let path = out.join("annual.json");
     let text = serde_json::to_string_pretty(&summary).expect("plain JSON values");
     std::fs::write(&path, text + "\n").map_err(|e| Error::io(&path, e))?;
+    write_html(&out.join("annual.html"), scene, result)?;
     for (k, (f, h)) in result
         .figures
         .receivers
@@ -175,4 +177,255 @@ fn write_hourly(path: &Path, result: &AnnualResult, h: &Hourly) -> Result<()> {
         }
     }
     w.flush().map_err(io)
+}
+
+/// A grid of `cols` × `rows` values (row-major, row 0 drawn at the top) as a viridis map
+/// of `px` pixels per value, 0 to `max`, with a colour bar labelled `0` and `max_label`
+/// beneath (NaN values drawn grey).
+pub fn map_png(
+    values: &[f64],
+    cols: usize,
+    rows: usize,
+    px: [usize; 2],
+    max: f64,
+    max_label: &str,
+) -> Result<Vec<u8>> {
+    use crate::raster::canvas::Canvas;
+    use crate::raster::palette::{normalise, viridis};
+    let (w, h) = (cols * px[0], rows * px[1]);
+    let (width, bar) = (w.max(160) + 20, 14);
+    let mut canvas = Canvas::new(width, h + bar + 40);
+    for (k, &v) in values.iter().enumerate() {
+        let (i, j) = (k % cols, k / cols);
+        let colour = if v.is_nan() {
+            [160, 160, 160]
+        } else {
+            viridis(normalise(v, max))
+        };
+        for y in j * px[1]..(j + 1) * px[1] {
+            let row = 3 * ((10 + y) * width + 10);
+            for x in i * px[0]..(i + 1) * px[0] {
+                canvas.rgb[row + 3 * x..row + 3 * x + 3].copy_from_slice(&colour);
+            }
+        }
+    }
+    let bar_width = width - 20;
+    for x in 0..bar_width {
+        let colour = viridis(x as f64 / (bar_width - 1) as f64);
+        for y in h + 16..h + 16 + bar {
+            let at = 3 * (y * width + 10 + x);
+            canvas.rgb[at..at + 3].copy_from_slice(&colour);
+        }
+    }
+    canvas.text(10.0, (h + 18 + bar) as f64, "0", [0, 0, 0]);
+    let label_x = width as f64 - 10.0 - crate::raster::font::text_width(max_label, 2) as f64;
+    canvas.text(label_x, (h + 18 + bar) as f64, max_label, [0, 0, 0]);
+    crate::raster::encode_rgb_png(width, canvas.height, &canvas.rgb)
+}
+
+/// A receiver's per-cell values as rows top-down (its v axis drawn upwards).
+fn receiver_rows(values: &[f64], shape: [u32; 2]) -> Vec<f64> {
+    let (nu, nv) = (shape[0] as usize, shape[1] as usize);
+    (0..nv)
+        .rev()
+        .flat_map(|j| (0..nu).map(move |i| values[j * nu + i]))
+        .collect()
+}
+
+/// The receiver mean per day (columns) and hour stamp (rows, hour 1 at the top), and
+/// its σ bound relative to it (NaN where dark).
+fn temporal(result: &AnnualResult, h: &Hourly) -> (Vec<f64>, Vec<f64>, usize) {
+    let days = result.matrix.records.div_ceil(24);
+    let (mut mean, mut rel) = (vec![0.0; days * 24], vec![f64::NAN; days * 24]);
+    let n = h.cells.max(1) as f64;
+    for (t, hour) in result.matrix.hours.iter().enumerate() {
+        let (day, row) = (hour.record / 24, hour.record % 24);
+        let range = t * h.cells..(t + 1) * h.cells;
+        let e = h.e[range.clone()].iter().map(|&x| x as f64).sum::<f64>() / n;
+        let s = h.sigma[range].iter().map(|&x| x as f64).sum::<f64>() / n;
+        mean[row * days + day] = e;
+        rel[row * days + day] = if e > 0.0 { s / e } else { f64::NAN };
+    }
+    (mean, rel, days)
+}
+
+/// A data URI of PNG bytes.
+fn png_uri(bytes: &[u8]) -> String {
+    use base64::Engine;
+    format!(
+        "data:image/png;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(bytes)
+    )
+}
+
+/// Scale top: the largest finite value rounded up to 1, 2 or 5 × 10ⁿ.
+fn nice_max(values: &[f64]) -> f64 {
+    let m = values
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    if !(m > 0.0) {
+        return 1.0;
+    }
+    let p = libm::pow(10.0, libm::log10(m).floor());
+    [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|k| k * p)
+        .find(|&x| x >= m)
+        .unwrap_or(10.0 * p)
+}
+
+/// One receiver's part of annual.html: its verdicts, its temporal maps and its metric maps.
+fn receiver_html(result: &AnnualResult, f: &ReceiverFigures, h: &Hourly) -> Result<String> {
+    let pct = |i: &Interval| {
+        format!(
+            "{:.1} % (95 %: {:.1}–{:.1} %)",
+            100.0 * i.value,
+            100.0 * i.low,
+            100.0 * i.high
+        )
+    };
+    let mut html = format!("<h2>Receiver {}</h2>\n<table>\n", escape(&f.name));
+    let ase_note =
+        crate::annual::metrics::verdict(f.ase.low > 0.1, f.ase.value > 0.1, f.ase.high > 0.1);
+    let rows = [
+        ("sDA300/50 % (2 % blinds rule)".to_string(), pct(&f.sda)),
+        (
+            "LEED v4.1 sDA points".into(),
+            format!("{}–{}", f.leed_points[0], f.leed_points[1]),
+        ),
+        ("ASE1000,250".into(), pct(&f.ase)),
+        ("ASE over 10 % (glare note needed)".into(), ase_note.into()),
+        (
+            "Blinds closed (occupied hours)".into(),
+            pct(&f.blinds_hours),
+        ),
+    ];
+    for (k, v) in rows.iter().chain(
+        &f.en17037
+            .iter()
+            .map(|(n, x, v)| (format!("EN 17037 {n} level"), format!("{v}: {}", pct(x))))
+            .collect::<Vec<_>>(),
+    ) {
+        html += &format!("<tr><th>{}</th><td>{}</td></tr>\n", escape(k), escape(v));
+    }
+    html += "</table>\n";
+    let (mean, rel, days) = temporal(result, h);
+    // The top of the scale at the 99th percentile of the lit hours: a few sunny hours
+    // would leave the rest of the year dark.
+    let p99 = crate::raster::quantile(&mean, 0.99, crate::raster::Rank::Nearest, |x| x > 0.0);
+    let top = nice_max(&[p99]);
+    let images = [
+        ("Receiver mean illuminance, day of the year (across) by hour (down); the scale tops at the lit hours' 99th percentile", map_png(&mean, days, 24, [2, 8], top, &format!("{top} lx"))?),
+        ("Its relative σ (bound: the mean of the cells' σ)", map_png(&rel, days, 24, [2, 8], 0.2, "20 %")?),
+    ];
+    let cell = |g: &dyn Fn(&crate::annual::metrics::CellFigures) -> f64| {
+        receiver_rows(&f.cells.iter().map(g).collect::<Vec<_>>(), f.shape)
+    };
+    let (nu, nv) = (f.shape[0] as usize, f.shape[1] as usize);
+    let px = (400 / nu.max(nv)).clamp(4, 40);
+    let mean_cells = cell(&|c| c.mean_lx);
+    let mean_top = nice_max(&mean_cells);
+    let maps = [
+        (
+            "Mean illuminance, occupied hours",
+            map_png(
+                &mean_cells,
+                nu,
+                nv,
+                [px, px],
+                mean_top,
+                &format!("{mean_top} lx"),
+            )?,
+        ),
+        (
+            "Its relative σ",
+            map_png(
+                &cell(&|c| c.mean_sigma_lx / c.mean_lx),
+                nu,
+                nv,
+                [px, px],
+                0.05,
+                "5 %",
+            )?,
+        ),
+        (
+            "DA300 with blinds",
+            map_png(
+                &cell(&|c| c.da_blinds.value),
+                nu,
+                nv,
+                [px, px],
+                1.0,
+                "100 %",
+            )?,
+        ),
+        (
+            "Probability the cell counts for sDA",
+            map_png(&cell(&|c| c.sda_probability), nu, nv, [px, px], 1.0, "1")?,
+        ),
+        (
+            "Direct-sun hours over 1000 lx",
+            map_png(
+                &cell(&|c| c.ase_hours.value),
+                nu,
+                nv,
+                [px, px],
+                1000.0,
+                "1000",
+            )?,
+        ),
+        (
+            "Probability the cell counts for ASE",
+            map_png(&cell(&|c| c.ase_probability), nu, nv, [px, px], 1.0, "1")?,
+        ),
+    ];
+    for (title, png) in images.iter().chain(&maps) {
+        html += &format!(
+            "<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>\n",
+            png_uri(png),
+            escape(title),
+            escape(title)
+        );
+    }
+    Ok(html)
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// annual.html: the run's settings and warnings, then each receiver's verdicts and maps.
+fn write_html(path: &Path, scene: &Scene, result: &AnnualResult) -> Result<()> {
+    let m = &result.matrix;
+    let mut html = format!(
+        "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{0}: annual daylight</title>\n\
+         <style>body{{font-family:sans-serif;margin:2em}}table{{border-collapse:collapse}}\
+         th,td{{border:1px solid #ccc;padding:4px 8px;text-align:left}}figure{{display:inline-block;margin:1em}}</style>\n\
+         </head><body>\n<h1>{0}: annual daylight</h1>\n<p>{1} records ({2} lit, {3} occupied); Reinhart MF:{4} \
+         ({5} patches + ground), {6} sun bins; {7} photons in {8:.1} s, stopped on {9}. Intervals are 95 % \
+         under the comonotone error model (docs/daylight.md, <i>Annual daylight</i>).</p>\n",
+        escape(&scene.name),
+        m.records,
+        m.hours.len(),
+        m.occupied_records,
+        m.patches.mf,
+        m.patches.len(),
+        m.suns.len(),
+        result.photons,
+        result.elapsed_s,
+        result.stop_reason
+    );
+    for w in &m.warnings {
+        html += &format!("<p>Warning: {}</p>\n", escape(w));
+    }
+    for (f, h) in result.figures.receivers.iter().zip(&result.hourly) {
+        html += &receiver_html(result, f, h)?;
+    }
+    html += "</body></html>\n";
+    std::fs::write(path, html).map_err(|e| Error::io(path, e))
 }

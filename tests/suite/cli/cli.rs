@@ -461,3 +461,104 @@ fn perez_sky_and_weather_commands_print_their_summaries() {
         &["b.epw", "12 hourly records", "makes 24", "truncated"],
     );
 }
+
+/// `luxtally annual` on a one-day weather file writes its files and prints its verdicts;
+/// bad input is one line each: no `[annual]`, bad keys, a missing or truncated weather
+/// file.
+#[test]
+fn annual_runs_and_refuses_bad_input_in_one_line() {
+    let dir = temp_dir("annual");
+    let office = std::fs::read_to_string("scenes/daylit_office.toml")
+        .unwrap()
+        .replace("cells = [12, 20]", "cells = [3, 4]");
+    let mut epw = String::from(
+        "LOCATION,Golden,CO,USA,test,724666,39.74,-105.18,-7.0,1829.0\nDESIGN CONDITIONS,0\n\
+         TYPICAL/EXTREME PERIODS,0\nGROUND TEMPERATURES,0\nHOLIDAYS/DAYLIGHT SAVINGS,No,0,0,0\n\
+         COMMENTS 1,test\nCOMMENTS 2,test\nDATA PERIODS,1,1,Data,Sunday, 6/21, 6/21\n",
+    );
+    for h in 1..=24 {
+        let (dni, dhi) = if (7..=18).contains(&h) {
+            (500, 100)
+        } else {
+            (0, 0)
+        };
+        epw += &format!(
+            "1990,6,21,{h},60,?9,20.0,5.0,40,81000,0,0,300,{},{dni},{dhi},999999,999999,999999,9999,180,3.0,5,5,20.0,77777,9,999999999,10,0.1,0,88,0.2,0,0\n",
+            dni / 2 + dhi
+        );
+    }
+    std::fs::write(dir.join("day.epw"), &epw).unwrap();
+    let truncated: String = epw.lines().take(20).map(|l| format!("{l}\n")).collect();
+    std::fs::write(dir.join("short.epw"), truncated).unwrap();
+    let write = |name: &str, table: &str| {
+        let path = dir.join(name);
+        std::fs::write(&path, format!("{office}\n{table}\n")).unwrap();
+        path.display().to_string()
+    };
+    let good = write(
+        "good.toml",
+        "[annual]\nweather = \"day.epw\"\nmf = 1\nsun_mf = 2\nphotons = 100_000",
+    );
+    let out_dir = dir.join("out");
+    let out = luxtally(&[
+        "annual",
+        &good,
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("sDA300/50 %") && stdout.contains("EN 17037 minimum level"),
+        "{stdout}"
+    );
+    for f in [
+        "annual.json",
+        "annual.html",
+        "annual_df_grid.csv",
+        "annual_df_grid_hours.csv",
+        "annual_df_grid_hourly.bin",
+    ] {
+        assert!(out_dir.join(f).is_file(), "{f} missing");
+    }
+    let cases: [(&str, &str, &[&str]); 6] = [
+        ("none.toml", "", &["no [annual] table"]),
+        (
+            "mf.toml",
+            "[annual]\nweather = \"day.epw\"\nmf = 0",
+            &["annual.mf", "MF"],
+        ),
+        (
+            "key.toml",
+            "[annual]\nweather = \"day.epw\"\nsky = 1",
+            &["annual", "sky"],
+        ),
+        (
+            "recv.toml",
+            "[annual]\nweather = \"day.epw\"\nreceivers = [\"desk\"]",
+            &["annual.receivers", "desk"],
+        ),
+        (
+            "missing.toml",
+            "[annual]\nweather = \"nowhere.epw\"",
+            &["nowhere.epw"],
+        ),
+        (
+            "short.toml",
+            "[annual]\nweather = \"short.epw\"",
+            &["short.epw"],
+        ),
+    ];
+    for (name, table, needles) in cases {
+        let path = write(name, table);
+        assert_fails_with(
+            &luxtally(&["annual", &path, "--out", out_dir.to_str().unwrap()]),
+            needles,
+        );
+    }
+}

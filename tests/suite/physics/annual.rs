@@ -44,7 +44,11 @@ fn march_fortnight() -> String {
     for d in 1..=14 {
         for h in 1..=24 {
             let up = (8..=18).contains(&h);
-            let shape = if up { ((h - 7) * (19 - h)) as f64 / 36.0 } else { 0.0 };
+            let shape = if up {
+                ((h - 7) * (19 - h)) as f64 / 36.0
+            } else {
+                0.0
+            };
             let (dni, dhi) = match (up, d % 2) {
                 (false, _) => (0.0, 0.0),
                 (true, 1) => (700.0 * shape.sqrt(), 60.0 + 30.0 * shape),
@@ -265,7 +269,8 @@ fn annual_intervals_cover_a_precise_run() {
     let reference = annual_run(&reference_scene, 999);
     let truth = &reference.figures.receivers[0];
     let scene = annual_scene(&dir, &march_fortnight(), &table(1 << 20));
-    let (mut cells, mut covered, mut sda_covered, mut ase_covered, mut z2) = (0, 0, 0, 0, Vec::new());
+    let (mut cells, mut covered, mut sda_covered, mut ase_covered, mut z2) =
+        (0, 0, 0, 0, Vec::new());
     let mut widths = [0.0; 2];
     let seeds = 16;
     for seed in 0..seeds {
@@ -274,7 +279,8 @@ fn annual_intervals_cover_a_precise_run() {
         for (c, t) in f.cells.iter().zip(&truth.cells) {
             cells += 1;
             covered += (c.da.low <= t.da.value && t.da.value <= c.da.high) as usize;
-            ase_covered += (c.ase_hours.low <= t.ase_hours.value && t.ase_hours.value <= c.ase_hours.high) as usize;
+            ase_covered += (c.ase_hours.low <= t.ase_hours.value
+                && t.ase_hours.value <= c.ase_hours.high) as usize;
             widths[0] += c.da.halfwidth();
         }
         sda_covered += (f.sda.low <= truth.sda.value && truth.sda.value <= f.sda.high) as usize;
@@ -298,11 +304,56 @@ fn annual_intervals_cover_a_precise_run() {
     );
     // Wide enough to cover, yet narrowing with photons as 1/√N would (√32 ≈ 5.7).
     assert!(widths[1] < 0.5 * widths[0], "DA half-widths {widths:?}");
-    assert!(share >= floor(cells), "DA intervals cover {share:.3} of {cells} cells");
-    assert!(sda_covered as f64 / seeds as f64 >= floor(seeds as usize), "sDA covered {sda_covered} of {seeds}");
+    assert!(
+        share >= floor(cells),
+        "DA intervals cover {share:.3} of {cells} cells"
+    );
+    assert!(
+        sda_covered as f64 / seeds as f64 >= floor(seeds as usize),
+        "sDA covered {sda_covered} of {seeds}"
+    );
     let ase_share = ase_covered as f64 / cells as f64;
-    assert!(ase_share >= floor(cells), "ASE hours' intervals cover {ase_share:.3} of {cells} cells");
+    assert!(
+        ase_share >= floor(cells),
+        "ASE hours' intervals cover {ase_share:.3} of {cells} cells"
+    );
     let rms = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
     eprintln!("hourly z-RMS {rms:.3} over {} cell-hours", z2.len());
     assert!((0.8..1.25).contains(&rms), "hourly z-RMS {rms:.3}");
+}
+
+/// The files: annual.json's figures as the result holds them, one CSV row per cell, the
+/// hours CSV one row per record, the hourly binary's size and its first lit record.
+#[test]
+fn annual_files_hold_the_results() {
+    let dir = temp_dir("annual_files");
+    let scene = annual_scene(&dir, &june_day(), "mf = 1\nsun_mf = 0\nphotons = 200_000");
+    let result = annual_run(&scene, 3);
+    let out = dir.join("out");
+    luxtally::output::annual::write_annual(&out, &scene, &result).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("annual.json")).unwrap()).unwrap();
+    let r = &result.figures.receivers[0];
+    assert_eq!(
+        json["receivers"][0]["sda_300_50"]["value"]
+            .as_f64()
+            .unwrap(),
+        r.sda.value
+    );
+    assert_eq!(json["records"].as_u64().unwrap(), 24);
+    let csv = std::fs::read_to_string(out.join("annual_df_grid.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 24);
+    let hours = std::fs::read_to_string(out.join("annual_df_grid_hours.csv")).unwrap();
+    assert_eq!(hours.lines().count(), 1 + 24);
+    let bin = std::fs::read(out.join("annual_df_grid_hourly.bin")).unwrap();
+    let cells = 24;
+    assert_eq!(&bin[..8], luxtally::output::annual::HOURLY_MAGIC);
+    assert_eq!(bin.len(), 16 + 24 * cells * 8);
+    let first = result.matrix.hours[0].record;
+    let at = 16 + first * cells * 8;
+    let e0 = f32::from_le_bytes(bin[at..at + 4].try_into().unwrap());
+    assert_eq!(e0, result.hourly[0].e[0]);
+    let html = std::fs::read_to_string(out.join("annual.html")).unwrap();
+    assert!(html.contains("sDA300/50 %") && html.contains("EN 17037 high level"));
+    assert_eq!(html.matches("data:image/png;base64,").count(), 8);
 }
