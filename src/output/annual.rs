@@ -1,15 +1,17 @@
 //! An annual run's files (docs/daylight.md, *Annual outputs*): annual.json (settings,
 //! warnings, rounds and every receiver's figures with their intervals and verdicts),
 //! per receiver a CSV of its cells' figures, a CSV of its hours and the hourly
-//! illuminance of every cell as a compact binary, streamed record by record; annual.html
+//! illuminance of every cell as a compact binary, streamed record by record (each file
+//! written atomically, as every output is: `write_atomic`); annual.html
 //! with the verdicts, the day × hour maps of each receiver's mean and the metric maps.
 
+use super::{file_stem, write_atomic};
 use crate::annual::metrics::{Hourly, Interval, ReceiverFigures};
 use crate::annual::AnnualResult;
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use serde_json::{json, Value};
-use std::io::{BufWriter, Write};
+use std::io::Write;
 use std::path::Path;
 
 /// The hourly file's first bytes; then u32 cells, u32 records, and per record the
@@ -73,7 +75,7 @@ pub fn write_annual(out: &Path, scene: &Scene, result: &AnnualResult) -> Result<
     });
     let path = out.join("annual.json");
     let text = serde_json::to_string_pretty(&summary).expect("plain JSON values");
-    std::fs::write(&path, text + "\n").map_err(|e| Error::io(&path, e))?;
+    write_atomic(&path, |w| w.write_all((text + "\n").as_bytes()))?;
     write_html(&out.join("annual.html"), scene, result)?;
     for (k, (f, h)) in result
         .figures
@@ -83,25 +85,15 @@ pub fn write_annual(out: &Path, scene: &Scene, result: &AnnualResult) -> Result<
         .enumerate()
     {
         let receiver = &scene.receivers[annual.receivers[k]];
-        write_cells(&out.join(format!("annual_{}.csv", f.name)), receiver, f)?;
-        write_hours(&out.join(format!("annual_{}_hours.csv", f.name)), result, h)?;
-        write_hourly(
-            &out.join(format!("annual_{}_hourly.bin", f.name)),
-            result,
-            h,
-        )?;
+        let stem = format!("annual_{}", file_stem(&f.name));
+        write_cells(&out.join(format!("{stem}.csv")), receiver, f)?;
+        write_hours(&out.join(format!("{stem}_hours.csv")), result, h)?;
+        write_hourly(&out.join(format!("{stem}_hourly.bin")), result, h)?;
     }
     Ok(())
 }
 
-fn create(path: &Path) -> Result<BufWriter<std::fs::File>> {
-    Ok(BufWriter::new(
-        std::fs::File::create(path).map_err(|e| Error::io(path, e))?,
-    ))
-}
-
 fn write_cells(path: &Path, receiver: &crate::scene::Receiver, f: &ReceiverFigures) -> Result<()> {
-    let mut w = create(path)?;
     let mut text = String::from(
         "i,j,x,y,z,mean_lx,mean_sigma_lx,da300,da300_low,da300_high,cda300,cda300_low,cda300_high,\
          da300_blinds,da300_blinds_low,da300_blinds_high,sda_probability,ase_hours,ase_hours_low,\
@@ -120,63 +112,66 @@ fn write_cells(path: &Path, receiver: &crate::scene::Receiver, f: &ReceiverFigur
             c.sda_probability, iv(&c.ase_hours), c.ase_probability, c.udi[0], c.udi[1], c.udi[2], c.udi[3]
         );
     }
-    w.write_all(text.as_bytes())
-        .and_then(|_| w.flush())
-        .map_err(|e| Error::io(path, e))
+    write_atomic(path, |w| w.write_all(text.as_bytes()))
+}
+
+/// Each record's lit hour (its index among the sky matrix's hours), or None if dark.
+fn lit_hours(result: &AnnualResult) -> Vec<Option<usize>> {
+    let mut out = vec![None; result.matrix.records];
+    for (t, hour) in result.matrix.hours.iter().enumerate() {
+        out[hour.record] = Some(t);
+    }
+    out
 }
 
 /// Per record: its stamp, whether occupied, the receiver's mean illuminance and an upper
 /// bound of its σ (the mean of the cells' σ: the cells' errors correlate at most fully).
 fn write_hours(path: &Path, result: &AnnualResult, h: &Hourly) -> Result<()> {
-    let mut lit = result.matrix.hours.iter().enumerate().peekable();
-    let mut w = create(path)?;
-    let io = |e| Error::io(path, e);
-    writeln!(
-        w,
-        "record,month,day,hour,occupied,global_horizontal_lx,mean_lx,mean_sigma_bound_lx"
-    )
-    .map_err(io)?;
-    for (record, &[month, day, hour, occupied]) in result.matrix.stamps.iter().enumerate() {
-        let (mut gh, mut mean, mut sd) = (0.0, 0.0, 0.0);
-        if let Some(&(t, sky)) = lit.peek().filter(|(_, s)| s.record == record) {
-            lit.next();
-            let n = h.cells.max(1) as f64;
-            let range = t * h.cells..(t + 1) * h.cells;
-            mean = h.e[range.clone()].iter().map(|&x| x as f64).sum::<f64>() / n;
-            sd = h.sigma[range].iter().map(|&x| x as f64).sum::<f64>() / n;
-            gh = sky.global_horizontal_lx;
-        }
+    let lit = lit_hours(result);
+    write_atomic(path, |w| {
         writeln!(
             w,
-            "{record},{month},{day},{hour},{occupied},{gh:.2},{mean:.4},{sd:.4}"
-        )
-        .map_err(io)?;
-    }
-    w.flush().map_err(io)
+            "record,month,day,hour,occupied,global_horizontal_lx,mean_lx,mean_sigma_bound_lx"
+        )?;
+        for (record, &[month, day, hour, occupied]) in result.matrix.stamps.iter().enumerate() {
+            let (mut gh, mut mean, mut sd) = (0.0, 0.0, 0.0);
+            if let Some(t) = lit[record] {
+                let n = h.cells.max(1) as f64;
+                let range = t * h.cells..(t + 1) * h.cells;
+                mean = h.e[range.clone()].iter().map(|&x| x as f64).sum::<f64>() / n;
+                sd = h.sigma[range].iter().map(|&x| x as f64).sum::<f64>() / n;
+                gh = result.matrix.hours[t].global_horizontal_lx;
+            }
+            writeln!(
+                w,
+                "{record},{month},{day},{hour},{occupied},{gh:.2},{mean:.4},{sd:.4}"
+            )?;
+        }
+        Ok(())
+    })
 }
 
+/// The hourly binary ([`HOURLY_MAGIC`]), written record by record.
 fn write_hourly(path: &Path, result: &AnnualResult, h: &Hourly) -> Result<()> {
-    let mut w = create(path)?;
-    let io = |e| Error::io(path, e);
-    w.write_all(HOURLY_MAGIC).map_err(io)?;
-    w.write_all(&(h.cells as u32).to_le_bytes()).map_err(io)?;
-    w.write_all(&(result.matrix.records as u32).to_le_bytes())
-        .map_err(io)?;
-    let zeros = vec![0u8; 8 * h.cells];
-    let mut lit = result.matrix.hours.iter().enumerate().peekable();
-    for record in 0..result.matrix.records {
-        match lit.peek().filter(|(_, s)| s.record == record) {
-            Some(&(t, _)) => {
-                lit.next();
-                let range = t * h.cells..(t + 1) * h.cells;
-                for x in h.e[range.clone()].iter().chain(&h.sigma[range]) {
-                    w.write_all(&x.to_le_bytes()).map_err(io)?;
+    let lit = lit_hours(result);
+    write_atomic(path, |w| {
+        w.write_all(HOURLY_MAGIC)?;
+        w.write_all(&(h.cells as u32).to_le_bytes())?;
+        w.write_all(&(result.matrix.records as u32).to_le_bytes())?;
+        let zeros = vec![0u8; 8 * h.cells];
+        for t in &lit {
+            match *t {
+                Some(t) => {
+                    let range = t * h.cells..(t + 1) * h.cells;
+                    for x in h.e[range.clone()].iter().chain(&h.sigma[range]) {
+                        w.write_all(&x.to_le_bytes())?;
+                    }
                 }
+                None => w.write_all(&zeros)?,
             }
-            None => w.write_all(&zeros).map_err(io)?,
         }
-    }
-    w.flush().map_err(io)
+        Ok(())
+    })
 }
 
 /// A grid of `cols` × `rows` values (row-major, row 0 drawn at the top) as a viridis map
@@ -427,5 +422,5 @@ fn write_html(path: &Path, scene: &Scene, result: &AnnualResult) -> Result<()> {
         html += &receiver_html(result, f, h)?;
     }
     html += "</body></html>\n";
-    std::fs::write(path, html).map_err(|e| Error::io(path, e))
+    write_atomic(path, |w| w.write_all(html.as_bytes()))
 }
