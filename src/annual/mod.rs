@@ -125,6 +125,8 @@ pub struct AnnualResult {
     pub photons: u64,
     pub rays: u64,
     pub direct_rays: u64,
+    /// Seconds to read the weather and make the sky matrix, then to trace and evaluate.
+    pub matrix_s: f64,
     pub elapsed_s: f64,
     pub stop_reason: &'static str,
 }
@@ -178,8 +180,10 @@ pub fn run(
         .annual
         .as_ref()
         .ok_or_else(|| Error::input(scene.path.display().to_string(), "has no [annual] table"))?;
+    let matrix_clock = Instant::now();
     let weather = crate::weather::read_weather(&annual.weather)?;
     let matrix = SkyMatrix::new(&weather, annual)?;
+    let matrix_s = matrix_clock.elapsed().as_secs_f64();
     let sources = sources(&matrix, &scene.portals);
     check_memory(scene, sources.len(), free_bytes)?;
     let mut base = scene.clone();
@@ -251,6 +255,7 @@ pub fn run(
                 photons,
                 rays,
                 direct_rays,
+                matrix_s,
                 elapsed_s,
                 stop_reason,
             });
@@ -363,7 +368,7 @@ pub fn round_line(round: &Round) -> String {
 pub fn result_text(scene: &Scene, result: &AnnualResult, out: &std::path::Path) -> String {
     let m = &result.matrix;
     let mut text = format!(
-        "{}: {} records ({} lit, {} occupied), {} sky patches + ground, {} sun bins; {} photons, {:.1} Mrays in {:.1} s, stopped on {}; results in {}\n",
+        "{}: {} records ({} lit, {} occupied), {} sky patches + ground, {} sun bins; {} photons, {:.1} Mrays in {:.1} s (the sky matrix {:.1} s before), stopped on {}; results in {}\n",
         scene.name,
         m.records,
         m.hours.len(),
@@ -373,6 +378,7 @@ pub fn result_text(scene: &Scene, result: &AnnualResult, out: &std::path::Path) 
         result.photons,
         result.rays as f64 * 1e-6,
         result.elapsed_s,
+        result.matrix_s,
         result.stop_reason,
         out.display()
     );

@@ -1,6 +1,7 @@
 //! The year's skies as daylight-coefficient weights: for every hour of the weather file,
 //! the Perez sky's mean luminance over each Reinhart patch (normalised to the hour's
-//! diffuse horizontal illuminance by the sky's own integral), the ground's luminance,
+//! diffuse horizontal illuminance by the sky's own integral: each patch's ∫L cos dω
+//! from the same Gauss–Legendre points as its mean, summed), the ground's luminance,
 //! and the sun's direct normal illuminance with the bin its position falls in.
 
 use crate::error::{Error, Result};
@@ -17,11 +18,6 @@ use std::f64::consts::PI;
 /// The year suns are placed in: a weather file's records come from several years (a
 /// typical year), so one fixed non-leap year is used for every record.
 pub const SOLAR_YEAR: f64 = 2023.0;
-
-/// z × φ cells of the 4-point Gauss–Legendre rule that normalises each hour's sky
-/// (`SkyModel::integrals_on`); tests/suite/physics/annual.rs checks it against the
-/// finer rule to 10⁻⁵.
-const NORMALISATION_CELLS: (usize, usize) = (32, 64);
 
 /// One hour with daylight.
 #[derive(Clone, Debug)]
@@ -171,27 +167,29 @@ fn record_sky(
         Ok(p) => p,
         Err(why) => return Ok(RecordSky::Refused(format!("line {}: {why}", h.line))),
     };
-    let model = SkyModel::Perez(perez);
-    let (solid, per_lz) = model.integrals_on(NORMALISATION_CELLS.0, NORMALISATION_CELLS.1);
-    if !(per_lz > 0.0) {
+    // The sky at unit scale, then scaled to the hour's diffuse horizontal illuminance
+    // by its own integral, summed over the patches from the points their means take.
+    let sky = Sky {
+        model: SkyModel::Perez(perez),
+        zenith_luminance_cdm2: 1.0,
+        horizontal_lx: 0.0,
+        radiant_integral: 0.0,
+        ground_reflectance: 0.0,
+        portals: Vec::new(),
+    };
+    let luminance = |w: DVec3| sky.luminance(w);
+    let parts: Vec<(f64, f64)> = (0..patches.len())
+        .map(|k| patches.integrals_over(k, &luminance))
+        .collect();
+    let horizontal: f64 = parts.iter().map(|p| p.1).sum();
+    if !(horizontal > 0.0) {
         return Ok(RecordSky::Refused(format!(
             "line {}: the Perez luminance is 0 everywhere",
             h.line
         )));
     }
-    let lz = perez.diffuse_horizontal_lx / per_lz;
-    let sky = Sky {
-        model,
-        zenith_luminance_cdm2: lz,
-        horizontal_lx: perez.diffuse_horizontal_lx,
-        radiant_integral: lz * solid,
-        ground_reflectance: 0.0,
-        portals: Vec::new(),
-    };
-    let luminance = |w: DVec3| sky.luminance(w);
-    let means: Vec<f32> = (0..patches.len())
-        .map(|k| patches.mean_over(k, &luminance) as f32)
-        .collect();
+    let scale = perez.diffuse_horizontal_lx / horizontal;
+    let means: Vec<f32> = parts.iter().map(|p| (p.0 * scale) as f32).collect();
     let direct_normal = perez.direct_normal_lx;
     let global = perez.diffuse_horizontal_lx + direct_normal * sun.z;
     let lit_sun = (direct_normal > 0.0).then_some(sun);

@@ -157,18 +157,26 @@ impl SkyPatches {
     /// The mean of `luminance` over patch `k`: ∫L dω / Ω by 8 × 8 Gauss–Legendre in
     /// (sin altitude, azimuth), in which the solid angle is uniform.
     pub fn mean_over(&self, k: usize, luminance: &dyn Fn(DVec3) -> f64) -> f64 {
+        self.integrals_over(k, luminance).0
+    }
+
+    /// Patch `k`'s mean luminance and its ∫L cos Z dω (its horizontal illuminance), both
+    /// from the same 8 × 8 Gauss–Legendre points as [`SkyPatches::mean_over`].
+    pub fn integrals_over(&self, k: usize, luminance: &dyn Fn(DVec3) -> f64) -> (f64, f64) {
         let p = self.patch(k);
         let (s0, s1) = (libm::sin(p.altitude[0]), libm::sin(p.altitude[1]));
-        let mut sum = 0.0;
+        let (mut mean, mut horizontal) = (0.0, 0.0);
         for (x, wx) in GAUSS8 {
             let s = s0 + x * (s1 - s0);
             let altitude = libm::asin(s.min(1.0));
             for (y, wy) in GAUSS8 {
                 let azimuth = p.azimuth[0] + y * (p.azimuth[1] - p.azimuth[0]);
-                sum += wx * wy * luminance(direction_rad(altitude, azimuth));
+                let l = wx * wy * luminance(direction_rad(altitude, azimuth));
+                mean += l;
+                horizontal += l * s;
             }
         }
-        sum
+        (mean, horizontal * p.solid_angle_sr)
     }
 }
 

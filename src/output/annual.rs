@@ -68,6 +68,7 @@ pub fn write_annual(out: &Path, scene: &Scene, result: &AnnualResult) -> Result<
         "photons": result.photons,
         "rays": result.rays,
         "direct_rays": result.direct_rays,
+        "sky_matrix_s": result.matrix_s,
         "elapsed_s": result.elapsed_s,
         "stop_reason": result.stop_reason,
         "rounds": result.rounds.iter().map(|r| json!({ "photons": r.photons, "elapsed_s": r.elapsed_s, "sda_halfwidth": r.sda_halfwidth })).collect::<Vec<_>>(),
