@@ -167,12 +167,12 @@ fn check_memory(scene: &Scene, sources: usize, free: Option<f64>) -> Result<()> 
 
 /// Runs the year: rounds of photons over every source until every analysed receiver's
 /// sDA interval is narrow enough, the photons run out or `interrupt` is set; `each` sees
-/// every round. `free_bytes`: the memory it may take (None: no limit).
+/// every round; `storage` says where it saves its work (and whether it goes on from it).
 pub fn run(
     scene: &Scene,
     options: &RunOptions,
     caster: &dyn RayCaster,
-    free_bytes: Option<f64>,
+    storage: &Storage<'_>,
     interrupt: &AtomicBool,
     each: &mut dyn FnMut(&Round),
 ) -> Result<AnnualResult> {
@@ -185,7 +185,7 @@ pub fn run(
     let matrix = SkyMatrix::new(&weather, annual)?;
     let matrix_s = matrix_clock.elapsed().as_secs_f64();
     let sources = sources(&matrix, &scene.portals);
-    check_memory(scene, sources.len(), free_bytes)?;
+    check_memory(scene, sources.len(), storage.free_bytes)?;
     let mut base = scene.clone();
     base.requirements.clear();
     base.daylight_factor = None;
@@ -205,6 +205,7 @@ pub fn run(
             total,
             &mut records,
             &mut coefficients,
+            storage,
             interrupt,
         )?;
         let hourly = metrics::hourly_all(&matrix, &sources, &coefficients, annual.receivers.len());
@@ -265,8 +266,26 @@ pub fn run(
     unreachable!("the rounds end by returning")
 }
 
-/// Traces every source up to its share of `total` photons (going on from its record)
-/// and refreshes its coefficients.
+/// Where an annual run keeps its work and how much memory it may take.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Storage<'a> {
+    /// The memory it may take (None: no limit).
+    pub free_bytes: Option<f64>,
+    /// A folder for one checkpoint per source (`NNNNN/checkpoint.bin`), saved as soon
+    /// as the source is traced in a round.
+    pub checkpoints: Option<&'a std::path::Path>,
+    /// Go on from the checkpoints found there.
+    pub resume: bool,
+}
+
+/// Source `k`'s checkpoint folder.
+fn source_dir(dir: &std::path::Path, k: usize) -> std::path::PathBuf {
+    dir.join(format!("{k:05}"))
+}
+
+/// Traces every source up to its share of `total` photons (going on from its record, or
+/// from its checkpoint when resuming), saves its checkpoint and refreshes its
+/// coefficients.
 #[allow(clippy::too_many_arguments)]
 fn trace_round(
     base: &mut Scene,
@@ -276,6 +295,7 @@ fn trace_round(
     total: u64,
     records: &mut [Option<Progress>],
     coefficients: &mut Coefficients,
+    storage: &Storage<'_>,
     interrupt: &AtomicBool,
 ) -> Result<()> {
     let annual = base.annual.clone().expect("checked by run");
@@ -283,46 +303,73 @@ fn trace_round(
         if interrupt.load(Ordering::Relaxed) {
             break;
         }
-        let want = source_photons(source.share, total);
-        if records[k]
-            .as_ref()
-            .is_some_and(|p| p.tallies.photons >= want)
-        {
-            continue;
-        }
         base.lights = vec![SceneLight {
             label: format!("annual source {k}"),
             kind: source.light.clone(),
         }];
         let mut opts = options.clone();
         opts.seed = crate::rng::sub_seed(options.seed, k as u64);
+        let want = source_photons(source.share, total);
         opts.stop = crate::criteria::StopCriteria {
             photons: Some(want),
             ..Default::default()
         };
-        let start = Start {
-            resumed: records[k].take(),
-            ..Start::default()
+        if let (None, Some(dir), true) = (&records[k], storage.checkpoints, storage.resume) {
+            records[k] = resumed(base, &opts, &source_dir(dir, k))?;
+        }
+        let done = records[k].as_ref().map_or(0, |p| p.tallies.photons);
+        if done < want {
+            let start = Start {
+                resumed: records[k].take(),
+                ..Start::default()
+            };
+            let result = run_from(
+                base,
+                &opts,
+                caster,
+                Instant::now(),
+                interrupt,
+                &mut (),
+                start,
+            )?;
+            if let Some(dir) = storage.checkpoints {
+                let dir = source_dir(dir, k);
+                std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+                let fingerprint = crate::scene::fingerprint::run(base);
+                crate::checkpoint::Checkpoint::of(&result.state(base, &opts), fingerprint)
+                    .save(&dir)?;
+            }
+            records[k] = Some(result.progress);
+        } else if !coefficients[k].is_empty() {
+            continue;
+        }
+        let Some(progress) = &records[k] else {
+            continue;
         };
-        let result = run_from(
-            base,
-            &opts,
-            caster,
-            Instant::now(),
-            interrupt,
-            &mut (),
-            start,
-        )?;
-        let counts = result.progress.tallies.counts();
+        let counts = progress.tallies.counts();
         coefficients[k] = (annual.receivers.iter())
             .map(|&r| {
-                let cells = result.progress.tallies.receiver_cells(&base.receivers, r);
+                let cells = progress.tallies.receiver_cells(&base.receivers, r);
                 cell_estimates(cells, base.receivers[r].cells, counts)
             })
             .collect();
-        records[k] = Some(result.progress);
     }
     Ok(())
+}
+
+/// Source's record from its checkpoint in `dir`, if there is one, checked against the
+/// source's scene and options.
+fn resumed(scene: &Scene, options: &RunOptions, dir: &std::path::Path) -> Result<Option<Progress>> {
+    if !dir.join(crate::checkpoint::FILE).exists()
+        && !dir.join(crate::checkpoint::PREVIOUS_FILE).exists()
+    {
+        return Ok(None);
+    }
+    let (checkpoint, path) = crate::checkpoint::Checkpoint::load(dir)?;
+    checkpoint.check(&path, scene, options)?;
+    checkpoint
+        .into_progress(path.display().to_string())
+        .map(Some)
 }
 
 /// The photons a target half-width `target` needs from a round at `photons` whose

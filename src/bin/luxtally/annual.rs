@@ -36,6 +36,11 @@ pub struct AnnualArgs {
     /// No progress lines.
     #[arg(long)]
     pub quiet: bool,
+    /// Go on from the per-source checkpoints in OUT/annual_checkpoints (every source is
+    /// saved there as soon as a round has traced it): the same seed and photons give the
+    /// same bits as an uninterrupted run.
+    #[arg(long)]
+    pub resume: bool,
 }
 
 pub fn command(args: AnnualArgs) -> Result<()> {
@@ -90,13 +95,24 @@ pub fn command(args: AnnualArgs) -> Result<()> {
             }
         });
     }
-    let free = luxtally::limits::available_bytes().map(|b| b as f64);
+    let checkpoints = out.join("annual_checkpoints");
+    if args.resume && !checkpoints.is_dir() {
+        return Err(Error::input(
+            "--resume",
+            format!("{} holds no annual checkpoints", checkpoints.display()),
+        ));
+    }
+    let storage = luxtally::annual::Storage {
+        free_bytes: luxtally::limits::available_bytes().map(|b| b as f64),
+        checkpoints: Some(&checkpoints),
+        resume: args.resume,
+    };
     let quiet = args.quiet;
     let result = luxtally::annual::run(
         &scene,
         &options,
         caster.as_ref(),
-        free,
+        &storage,
         &interrupt,
         &mut |round| {
             if !quiet {
