@@ -436,3 +436,19 @@ fn an_interrupted_annual_run_resumes_to_the_same_bits() {
     assert_eq!(bits(&resumed), bits(&whole));
     assert_eq!(resumed.photons, whole.photons);
 }
+
+/// The coefficients' memory is estimated before the first photon: a run that would not
+/// fit is refused in one line saying what to change.
+#[test]
+fn an_annual_run_that_would_not_fit_is_refused_up_front() {
+    let dir = temp_dir("annual_memory");
+    let scene = annual_scene(&dir, &june_day(), "mf = 4\nsun_mf = 0");
+    let options = RunOptions::from_scene(&scene);
+    let caster = luxtally::accel::build_with(options.backend, options.bvh, &scene.geometry).unwrap();
+    let storage = annual::Storage { free_bytes: Some(1e6), ..annual::Storage::default() };
+    let e = match annual::run(&scene, &options, caster.as_ref(), &storage, &AtomicBool::new(false), &mut |_| {}) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("2309 sources × 25 cells fit in 1 MB?"),
+    };
+    assert!(e.contains("memory") && e.contains("coarser mf") && !e.contains('\n'), "{e}");
+}
