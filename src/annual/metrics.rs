@@ -259,8 +259,9 @@ pub struct CellFigures {
     /// Occupied hours of direct sun over 1000 lx, and the probability they exceed 250.
     pub ase_hours: Interval,
     pub ase_probability: f64,
-    /// UDI: fractions of occupied hours below 100, 100–300, 300–3000, above 3000 lx.
-    pub udi: [f64; 4],
+    /// UDI: fractions of occupied hours below 100, 100–300, 300–3000, above 3000 lx
+    /// (the middle bins are not monotone in z: their intervals are ranges).
+    pub udi: [Interval; 4],
 }
 
 /// One receiver's annual figures.
@@ -324,6 +325,8 @@ struct AtZ {
     cda: Vec<f64>,
     da_blinds: Vec<u32>,
     ase: Vec<u32>,
+    /// Lit occupied hours per UDI bin.
+    udi: Vec<[u32; 4]>,
     blinds_hours: u32,
     /// Per EN 17037 level: daylight hours meeting E_T over 50 % and E_TM over 95 %.
     en17037: [[u32; 2]; 3],
@@ -336,6 +339,7 @@ fn counts_at(matrix: &SkyMatrix, h: &Hourly, z: f64, shade: f64, daylight: &[boo
         cda: vec![0.0; n],
         da_blinds: vec![0; n],
         ase: vec![0; n],
+        udi: vec![[0; 4]; n],
         blinds_hours: 0,
         en17037: [[0; 2]; 3],
     };
@@ -369,6 +373,7 @@ fn counts_at(matrix: &SkyMatrix, h: &Hourly, z: f64, shade: f64, daylight: &[boo
             a.da[c] += (x >= DA_LX) as u32;
             a.cda[c] += (x / DA_LX).clamp(0.0, 1.0);
             a.da_blinds[c] += (scale * x >= DA_LX) as u32;
+            a.udi[c][UDI_EDGES_LX.iter().filter(|&&edge| x >= edge).count()] += 1;
         }
     }
     a
@@ -410,7 +415,7 @@ fn receiver_figures(
         Interval::of(&grid, &at.iter().map(f).collect::<Vec<_>>())
     };
     let cells: Vec<CellFigures> = (0..n)
-        .map(|c| cell_figures(matrix, h, c, &grid, &at, occupied))
+        .map(|c| cell_figures(h, c, &grid, &at, occupied))
         .collect();
     let sda = series(&|a| {
         a.da_blinds
@@ -445,27 +450,16 @@ fn receiver_figures(
     }
 }
 
-fn cell_figures(
-    matrix: &SkyMatrix,
-    h: &Hourly,
-    c: usize,
-    grid: &[f64],
-    at: &[AtZ],
-    occupied: f64,
-) -> CellFigures {
+fn cell_figures(h: &Hourly, c: usize, grid: &[f64], at: &[AtZ], occupied: f64) -> CellFigures {
     let series = |f: &dyn Fn(&AtZ) -> f64| -> Interval {
         Interval::of(grid, &at.iter().map(f).collect::<Vec<_>>())
     };
-    let mut udi = [0.0; 4];
-    for (t, hour) in matrix.hours.iter().enumerate() {
-        if hour.occupied {
-            let e = h.e[t * h.cells + c] as f64;
-            udi[UDI_EDGES_LX.iter().filter(|&&edge| e >= edge).count()] += 1.0;
-        }
-    }
     // Dark occupied records fall in the lowest bin.
-    let lit_occupied: f64 = udi.iter().sum();
-    udi[0] += occupied - lit_occupied;
+    let udi_share = |a: &AtZ, bin: usize| {
+        let lit: u32 = a.udi[c].iter().sum();
+        let dark = if bin == 0 { occupied - lit as f64 } else { 0.0 };
+        (a.udi[c][bin] as f64 + dark) / occupied
+    };
     let passes_sda: Vec<bool> = at
         .iter()
         .map(|a| a.da_blinds[c] as f64 / occupied >= SDA_HOURS_FRACTION)
@@ -480,6 +474,6 @@ fn cell_figures(
         sda_probability: probability(grid, &passes_sda),
         ase_hours: series(&|a| a.ase[c] as f64),
         ase_probability: probability(grid, &passes_ase),
-        udi: udi.map(|x| x / occupied),
+        udi: [0, 1, 2, 3].map(|bin| series(&|a| udi_share(a, bin))),
     }
 }

@@ -98,7 +98,9 @@ fn write_cells(path: &Path, receiver: &crate::scene::Receiver, f: &ReceiverFigur
     let mut text = String::from(
         "i,j,x,y,z,mean_lx,mean_sigma_lx,da300,da300_low,da300_high,cda300,cda300_low,cda300_high,\
          da300_blinds,da300_blinds_low,da300_blinds_high,sda_probability,ase_hours,ase_hours_low,\
-         ase_hours_high,ase_probability,udi_below_100,udi_100_300,udi_300_3000,udi_above_3000\n",
+         ase_hours_high,ase_probability,udi_below_100,udi_below_100_low,udi_below_100_high,udi_100_300,udi_100_300_low,\
+         udi_100_300_high,udi_300_3000,udi_300_3000_low,udi_300_3000_high,udi_above_3000,\
+         udi_above_3000_low,udi_above_3000_high\n",
     );
     let [nu, nv] = receiver.cells;
     for (k, c) in f.cells.iter().enumerate() {
@@ -108,9 +110,22 @@ fn write_cells(path: &Path, receiver: &crate::scene::Receiver, f: &ReceiverFigur
             + receiver.v * ((j as f64 + 0.5) / nv as f64);
         let iv = |x: &Interval| format!("{:.6},{:.6},{:.6}", x.value, x.low, x.high);
         text += &format!(
-            "{i},{j},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{:.6},{},{:.6},{:.6},{:.6},{:.6},{:.6}\n",
-            p.x, p.y, p.z, c.mean_lx, c.mean_sigma_lx, iv(&c.da), iv(&c.cda), iv(&c.da_blinds),
-            c.sda_probability, iv(&c.ase_hours), c.ase_probability, c.udi[0], c.udi[1], c.udi[2], c.udi[3]
+            "{i},{j},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{},{:.6},{},{:.6},{},{},{},{}\n",
+            p.x,
+            p.y,
+            p.z,
+            c.mean_lx,
+            c.mean_sigma_lx,
+            iv(&c.da),
+            iv(&c.cda),
+            iv(&c.da_blinds),
+            c.sda_probability,
+            iv(&c.ase_hours),
+            c.ase_probability,
+            iv(&c.udi[0]),
+            iv(&c.udi[1]),
+            iv(&c.udi[2]),
+            iv(&c.udi[3])
         );
     }
     write_atomic(path, |w| w.write_all(text.as_bytes()))

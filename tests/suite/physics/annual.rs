@@ -416,12 +416,32 @@ fn an_interrupted_annual_run_resumes_to_the_same_bits() {
     let dir = temp_dir("annual_resume");
     let scene = annual_scene(&dir, &june_day(), "mf = 1\nsun_mf = 0\nphotons = 800_000");
     let options = RunOptions::from_scene(&scene);
-    let caster = luxtally::accel::build_with(options.backend, options.bvh, &scene.geometry).unwrap();
+    let caster =
+        luxtally::accel::build_with(options.backend, options.bvh, &scene.geometry).unwrap();
     let go = |checkpoints: &std::path::Path, resume: bool, interrupt: &AtomicBool| {
-        let storage = annual::Storage { free_bytes: None, checkpoints: Some(checkpoints), resume };
-        annual::run(&scene, &options, caster.as_ref(), &storage, interrupt, &mut |_| {}).unwrap()
+        let storage = annual::Storage {
+            free_bytes: None,
+            checkpoints: Some(checkpoints),
+            resume,
+        };
+        annual::run(
+            &scene,
+            &options,
+            caster.as_ref(),
+            &storage,
+            interrupt,
+            &mut |_| {},
+        )
+        .unwrap()
     };
-    let bits = |r: &AnnualResult| r.hourly[0].e.iter().chain(&r.hourly[0].sigma).map(|x| x.to_bits()).collect::<Vec<_>>();
+    let bits = |r: &AnnualResult| {
+        r.hourly[0]
+            .e
+            .iter()
+            .chain(&r.hourly[0].sigma)
+            .map(|x| x.to_bits())
+            .collect::<Vec<_>>()
+    };
     let whole = go(&dir.join("whole"), false, &AtomicBool::new(false));
     let interrupt = Arc::new(AtomicBool::new(false));
     let flag = interrupt.clone();
@@ -444,11 +464,25 @@ fn an_annual_run_that_would_not_fit_is_refused_up_front() {
     let dir = temp_dir("annual_memory");
     let scene = annual_scene(&dir, &june_day(), "mf = 4\nsun_mf = 0");
     let options = RunOptions::from_scene(&scene);
-    let caster = luxtally::accel::build_with(options.backend, options.bvh, &scene.geometry).unwrap();
-    let storage = annual::Storage { free_bytes: Some(1e6), ..annual::Storage::default() };
-    let e = match annual::run(&scene, &options, caster.as_ref(), &storage, &AtomicBool::new(false), &mut |_| {}) {
+    let caster =
+        luxtally::accel::build_with(options.backend, options.bvh, &scene.geometry).unwrap();
+    let storage = annual::Storage {
+        free_bytes: Some(1e6),
+        ..annual::Storage::default()
+    };
+    let e = match annual::run(
+        &scene,
+        &options,
+        caster.as_ref(),
+        &storage,
+        &AtomicBool::new(false),
+        &mut |_| {},
+    ) {
         Err(e) => e.to_string(),
         Ok(_) => panic!("2309 sources × 25 cells fit in 1 MB?"),
     };
-    assert!(e.contains("memory") && e.contains("coarser mf") && !e.contains('\n'), "{e}");
+    assert!(
+        e.contains("memory") && e.contains("coarser mf") && !e.contains('\n'),
+        "{e}"
+    );
 }
