@@ -415,7 +415,7 @@ def main():
     ap.add_argument("--lux-args", default="--sda-halfwidth 0.5",
                     help="extra luxtally annual options (default: one round, '--sda-halfwidth 0.5')")
     ap.add_argument("--lux-out", type=Path, help="use this finished luxtally annual output instead of running it")
-    ap.add_argument("--lux-variants", default="sun_mf=2",
+    ap.add_argument("--lux-variants", default="sun_mf=2,sun_mf=0",
                     help="comma-separated [annual] overrides run as extra luxtally variants (''=none)")
     ap.add_argument("--json", type=Path, default=None)
     ap.add_argument("--md", type=Path, default=REPO / "benches" / "radiance" / "ANNUAL_RESULTS.md")
@@ -650,6 +650,9 @@ def main():
                                      [s / x for s, x in zip(vs, vm)]))
     # Radiance's sun in one patch, compared the same way (noise of run a alone ~ sqrt2 x).
     cmp_sun1 = compare_cells(lux_mean, lux_sig, rad["a_sun1"]["mean"], [s * math.sqrt(2) for s in rad_sig])
+    cmp_deep = None
+    if "deep" in rad:
+        cmp_deep = compare_cells(lux_mean, lux_sig, rad["deep"]["mean"], [x * math.sqrt(2) for x in rad_sig])
     deep = None
     if "deep" in rad:
         deep = dict(mean_lx=mean(rad["deep"]["mean"]), ratio_to_ab=mean(rad["deep"]["mean"]) / mean(rad_mean),
@@ -662,7 +665,10 @@ def main():
         bands.append(dict(rows=f"{b * nv // 5}-{(b + 1) * nv // 5 - 1}",
                           lux=mean([lux_mean[i] for i in idx]), rad=mean([rad_mean[i] for i in idx]),
                           rad_sun1=mean([rad["a_sun1"]["mean"][i] for i in idx]),
-                          rad_sky_only=mean([rad["a_sky_only"]["mean"][i] for i in idx])))
+                          rad_sky_only=mean([rad["a_sky_only"]["mean"][i] for i in idx]),
+                          rad_deep=mean([rad["deep"]["mean"][i] for i in idx]) if "deep" in rad else None,
+                          lux_variants={k: mean([float(vc[i]["mean_lx"]) for i in idx])
+                                        for k, (_, (vc, _)) in variants.items()}))
 
     res = dict(
         scene=str(scene_path.relative_to(REPO)) if scene_path.is_relative_to(REPO) else str(scene_path),
@@ -683,14 +689,17 @@ def main():
                       sky_only_mean_lx=mean(rad["a_sky_only"]["mean"]),
                       deep=deep,
                       per_sensor=dict(mean_a=rad["a"]["mean"], mean_b=rad["b"]["mean"], da_a=rad["a"]["da"],
-                                      da_b=rad["b"]["da"])),
-        luxtally=dict(run={k: v for k, v in lux_runs["scene"].items() if k != "summary"},
+                                      da_b=rad["b"]["da"], mean_deep=rad.get("deep", {}).get("mean"),
+                                      mean_sun_one_patch=rad["a_sun1"]["mean"],
+                                      mean_sky_only=rad["a_sky_only"]["mean"])),
+        luxtally=dict(per_sensor=dict(mean_lx=lux_mean, mean_sigma_lx=lux_sig, da300=lux_da),
+                      run={k: v for k, v in lux_runs["scene"].items() if k != "summary"},
                       photons=lux_runs["scene"]["summary"]["photons"],
                       elapsed_s=lux_runs["scene"]["summary"]["elapsed_s"],
                       sun_bins=lux_runs["scene"]["summary"]["sun_bins"],
                       mean_lx=mean(lux_mean), mean_sigma_rms_rel=compare.rms([s / x for s, x in zip(lux_sig, lux_mean)]),
                       sda=sda(lux_da), variants=cmp_variants),
-        comparison=cmp_main, comparison_radiance_sun_disc=cmp_sun1, skies=skies, budget=budget, depth_bands=bands,
+        comparison=cmp_main, comparison_radiance_sun_disc=cmp_sun1, comparison_radiance_deep=cmp_deep, skies=skies, budget=budget, depth_bands=bands,
         wall_s_script=time.perf_counter() - t_start,
     )
     jpath = a.json or (work / "annual_results.json")
@@ -737,8 +746,9 @@ def markdown(r):
     out.append("|---|---|---|")
     out.append(f"| mean over sensors of the annual mean | {R['mean_lx']:.1f} lx (runs {R['mean_lx_runs'][0]:.1f}, "
                f"{R['mean_lx_runs'][1]:.1f}) | {L['mean_lx']:.1f} lx |")
-    out.append(f"| per-sensor σ of the annual mean, RMS relative | {R['mean_sigma_rms_rel']:.2%} (two-run mean; "
-               f"per run {R['noise_per_run_rms_rel']:.2%}) | {L['mean_sigma_rms_rel']:.2%} (mean_sigma_lx) |")
+    out.append(f"| σ of a sensor's annual mean: RMS over sensors of σ/value | {R['mean_sigma_rms_rel']:.2%} (two-run mean, "
+               f"from each row's pooled run difference) | {L['mean_sigma_rms_rel']:.2%} (`mean_sigma_lx`) |")
+    out.append(f"| Radiance's noise per run, RMS(a − b)/√2 / RMS(value) | {R['noise_per_run_rms_rel']:.2%} | – |")
     out.append(f"| sDA300/50 % (no blinds) | {R['sda']:.1%} (runs {R['sda_runs'][0]:.1%}, {R['sda_runs'][1]:.1%}) | "
                f"{L['sda']:.1%} (from `da300`) |")
     if R["deep"]:
@@ -752,8 +762,9 @@ def markdown(r):
         out.append(f"| luxtally, `{k}` | – | {v['mean_lx']:.1f} lx, sDA {v['sda']:.1%}, σ {v['mean_sigma_rms_rel']:.2%} |")
     out.append("")
     out.append("| agreement (luxtally / Radiance, per sensor) | scene (sun_mf " + str(r["sun_mf"]) + ") | "
-               + " | ".join(f"luxtally {k}" for k in L["variants"]) + " | Radiance sun in one patch |")
-    out.append("|---|---|" + "---|" * len(L["variants"]) + "---|")
+               + " | ".join(f"luxtally {k}" for k in L["variants"]) + " | Radiance sun in one patch (run a) |"
+               + (" Radiance -ab 10 (deep run) |" if r.get("comparison_radiance_deep") else ""))
+    out.append("|---|---|" + "---|" * len(L["variants"]) + "---|" + ("---|" if r.get("comparison_radiance_deep") else ""))
     rows = [("mean ratio", "mean_ratio", "{:.4f}"), ("ratio of the means", "ratio_of_means", "{:.4f}"),
             ("min – max ratio", None, None),
             ("RMS relative difference", "rms_rel_diff", "{:.2%}"),
@@ -762,6 +773,8 @@ def markdown(r):
             ("RMS z after scaling Radiance by the ratio of the means", "z_rms_scaled", "{:.2f}"),
             ("fraction within 2σ after that scaling", "within_2sigma_scaled", "{:.1%}")]
     cols = [C] + [v["cmp"] for v in L["variants"].values()] + [r["comparison_radiance_sun_disc"]]
+    if r.get("comparison_radiance_deep"):
+        cols.append(r["comparison_radiance_deep"])
     for label, key, fmt in rows:
         if key is None:
             cells = [f"{c['min_ratio']:.3f} – {c['max_ratio']:.3f}" for c in cols]
@@ -770,10 +783,14 @@ def markdown(r):
         out.append(f"| {label} | " + " | ".join(cells) + " |")
     out.append("")
     out.append("## By depth (mean annual illuminance of 6 rows of 20 sensors, lx)\n")
-    out.append("| rows (0 = window) | luxtally | Radiance | ratio | Radiance, sun in one patch | Radiance, sky + ground only |")
-    out.append("|---|---|---|---|---|---|")
+    vk = list(L["variants"])
+    out.append("| rows (0 = window) | luxtally | " + "".join(f"luxtally {k} | " for k in vk)
+               + "Radiance | ratio | Radiance -ab 10 | ratio | Radiance, sun in one patch | Radiance, sky + ground only |")
+    out.append("|---|---|" + "---|" * len(vk) + "---|---|---|---|---|---|")
     for b in r["depth_bands"]:
-        out.append(f"| {b['rows']} | {b['lux']:.1f} | {b['rad']:.1f} | {b['lux'] / b['rad']:.4f} | {b['rad_sun1']:.1f} | "
+        dp = b["rad_deep"] or float("nan")
+        out.append(f"| {b['rows']} | {b['lux']:.1f} | " + "".join(f"{b['lux_variants'][k]:.1f} | " for k in vk)
+                   + f"{b['rad']:.1f} | {b['lux'] / b['rad']:.4f} | {dp:.1f} | {b['lux'] / dp:.4f} | {b['rad_sun1']:.1f} | "
                    f"{b['rad_sky_only']:.1f} |")
     out.append("")
     sk = r["skies"]
