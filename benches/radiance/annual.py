@@ -415,8 +415,9 @@ def main():
     ap.add_argument("--lux-args", default="--sda-halfwidth 0.5",
                     help="extra luxtally annual options (default: one round, '--sda-halfwidth 0.5')")
     ap.add_argument("--lux-out", type=Path, help="use this finished luxtally annual output instead of running it")
-    ap.add_argument("--lux-variants", default="sun_mf=2,sun_mf=0",
-                    help="comma-separated [annual] overrides run as extra luxtally variants (''=none)")
+    ap.add_argument("--lux-variants", default="seed=2,sun_mf=2,sun_mf=0",
+                    help="comma-separated [annual] overrides run as extra luxtally variants, seed=N: "
+                         "the scene with --seed N ('' = none)")
     ap.add_argument("--json", type=Path, default=None)
     ap.add_argument("--md", type=Path, default=REPO / "benches" / "radiance" / "ANNUAL_RESULTS.md")
     a = ap.parse_args()
@@ -465,6 +466,14 @@ def main():
     variants = {}
     for spec in [s for s in a.lux_variants.split(",") if s.strip()]:
         key, val = (x.strip() for x in spec.split("="))
+        if key == "seed":  # the scene as it is, another seed: luxtally's own spread
+            vout = work / f"lux_seed_{val}"
+            log(f"luxtally annual, --seed {val}")
+            r = run_luxtally(a.luxtally, scene_path, vout, [*a.lux_args.split(), "--seed", val], a.procs)
+            r["out"] = str(vout)
+            variants[f"seed={val}"] = (r, lux_results(vout, a.receiver))
+            log(f"  {r['wall_s']:.1f} s wall")
+            continue
         text = scene_path.read_text()
         if f"\n{key} =" in text:
             lines = [f"{key} = {val}" if ln.startswith(f"{key} =") else ln for ln in text.split("\n")]
@@ -648,6 +657,18 @@ def main():
                                  sda=sda(vd), wall_s=r["wall_s"], photons=r["summary"]["photons"],
                                  sun_bins=r["summary"]["sun_bins"], mean_sigma_rms_rel=compare.rms(
                                      [s / x for s, x in zip(vs, vm)]))
+    seed_check = None
+    for key, (r, (vcells, _)) in variants.items():
+        if key.startswith("seed="):
+            vm = [float(c["mean_lx"]) for c in vcells]
+            vs = [float(c["mean_sigma_lx"]) for c in vcells]
+            zz = [(x - y) / math.sqrt(s1 * s1 + s2 * s2) for x, y, s1, s2 in zip(lux_mean, vm, lux_sig, vs)]
+            seed_check = dict(variant=key, grid_mean=[mean(lux_mean), mean(vm)],
+                              grid_mean_rel_diff=mean(lux_mean) / mean(vm) - 1,
+                              z_rms=compare.rms(zz), within_2sigma=sum(1 for x in zz if abs(x) <= 2) / len(zz),
+                              observed_rel_noise_per_run=compare.rms([x - y for x, y in zip(lux_mean, vm)])
+                              / math.sqrt(2) / compare.rms([(x + y) / 2 for x, y in zip(lux_mean, vm)]))
+            log(f"luxtally seed check: {json.dumps(seed_check)}")
     # Radiance's sun in one patch, compared the same way (noise of run a alone ~ sqrt2 x).
     cmp_sun1 = compare_cells(lux_mean, lux_sig, rad["a_sun1"]["mean"], [s * math.sqrt(2) for s in rad_sig])
     cmp_deep = None
@@ -699,7 +720,7 @@ def main():
                       sun_bins=lux_runs["scene"]["summary"]["sun_bins"],
                       mean_lx=mean(lux_mean), mean_sigma_rms_rel=compare.rms([s / x for s, x in zip(lux_sig, lux_mean)]),
                       sda=sda(lux_da), variants=cmp_variants),
-        comparison=cmp_main, comparison_radiance_sun_disc=cmp_sun1, comparison_radiance_deep=cmp_deep, skies=skies, budget=budget, depth_bands=bands,
+        comparison=cmp_main, comparison_radiance_sun_disc=cmp_sun1, comparison_radiance_deep=cmp_deep, luxtally_seed_check=seed_check, skies=skies, budget=budget, depth_bands=bands,
         wall_s_script=time.perf_counter() - t_start,
     )
     jpath = a.json or (work / "annual_results.json")
@@ -782,6 +803,12 @@ def markdown(r):
             cells = [fmt.format(c[key]) for c in cols]
         out.append(f"| {label} | " + " | ".join(cells) + " |")
     out.append("")
+    sc = r.get("luxtally_seed_check")
+    if sc:
+        out.append(f"luxtally against itself ({sc['variant']}): grid means {sc['grid_mean'][0]:.1f} and {sc['grid_mean'][1]:.1f} lx "
+                   f"({sc['grid_mean_rel_diff']:+.2%}); per sensor z = (a − b)/√(σ_a² + σ_b²) from `mean_sigma_lx`: "
+                   f"RMS {sc['z_rms']:.2f}, {sc['within_2sigma']:.1%} within 2σ; observed noise per run "
+                   f"RMS(a − b)/√2 / RMS(value) {sc['observed_rel_noise_per_run']:.2%}.\n")
     out.append("## By depth (mean annual illuminance of 6 rows of 20 sensors, lx)\n")
     vk = list(L["variants"])
     out.append("| rows (0 = window) | luxtally | " + "".join(f"luxtally {k} | " for k in vk)
