@@ -277,6 +277,25 @@ pub struct DistantEmitter {
 }
 
 impl DistantEmitter {
+    /// The emitter of `table` for a scene of bounding sphere `sphere` and local frame
+    /// `origin`, with the scene's `portals` (world): what every distant light's
+    /// `Light::emitter` makes.
+    pub fn of(
+        table: DistantTable,
+        origin: DVec3,
+        sphere: &super::BoundingSphere,
+        portals: &[Portal],
+        next_events_by_portals: bool,
+    ) -> Arc<dyn Emitter> {
+        Arc::new(DistantEmitter {
+            table,
+            center: sphere.center - origin,
+            radius: sphere.radius,
+            portals: portals.iter().map(|o| o.shifted(-origin)).collect(),
+            next_events_by_portals,
+        })
+    }
+
     /// Next-event pieces with portals. The sphere of directions seen from `p` is split
     /// in two: those through some portal, sampled by the portals' solid angles (share
     /// 1 − [`SKY_TABLE_SHARE`], split evenly, combined by their summed density where

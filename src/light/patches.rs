@@ -321,13 +321,13 @@ impl Light for PatchSky {
     }
 
     fn emitter(&self, origin: DVec3, sphere: &BoundingSphere) -> Arc<dyn Emitter> {
-        Arc::new(DistantEmitter {
-            table: self.table(),
-            center: sphere.center - origin,
-            radius: sphere.radius,
-            portals: self.portals.iter().map(|o| o.shifted(-origin)).collect(),
-            next_events_by_portals: self.next_events_by_portals,
-        })
+        DistantEmitter::of(
+            self.table(),
+            origin,
+            sphere,
+            &self.portals,
+            self.next_events_by_portals,
+        )
     }
 
     fn describe(&self) -> String {

@@ -473,13 +473,7 @@ impl Light for Sky {
     }
 
     fn emitter(&self, origin: DVec3, sphere: &BoundingSphere) -> Arc<dyn Emitter> {
-        Arc::new(DistantEmitter {
-            table: self.table(),
-            center: sphere.center - origin,
-            radius: sphere.radius,
-            portals: self.portals.iter().map(|o| o.shifted(-origin)).collect(),
-            next_events_by_portals: true,
-        })
+        DistantEmitter::of(self.table(), origin, sphere, &self.portals, true)
     }
 
     fn describe(&self) -> String {
