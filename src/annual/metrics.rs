@@ -40,6 +40,14 @@ impl Hourly {
     fn at(&self, hour: usize) -> std::ops::Range<usize> {
         hour * self.cells..(hour + 1) * self.cells
     }
+
+    /// Lit hour `hour`'s mean over the cells and an upper bound of its σ: the mean of
+    /// the cells' σ (their errors correlate at most fully).
+    pub fn receiver_mean(&self, hour: usize) -> (f64, f64) {
+        let n = self.cells.max(1) as f64;
+        let mean = |v: &[f32]| v[self.at(hour)].iter().map(|&x| x as f64).sum::<f64>() / n;
+        (mean(&self.e), mean(&self.sigma))
+    }
 }
 
 /// [`Hourly`] of every analysed receiver.
@@ -286,6 +294,18 @@ pub struct ReceiverFigures {
 #[derive(Clone, Debug, Default)]
 pub struct AnnualFigures {
     pub receivers: Vec<ReceiverFigures>,
+}
+
+impl ReceiverFigures {
+    /// Whether ASE exceeds 10 % of the area (LEED then asks for a glare note).
+    pub fn ase_over_10_percent(&self) -> &'static str {
+        let over = |x: f64| x > 0.1;
+        verdict(
+            over(self.ase.low),
+            over(self.ase.value),
+            over(self.ase.high),
+        )
+    }
 }
 
 impl AnnualFigures {

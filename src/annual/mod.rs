@@ -145,18 +145,34 @@ pub struct RoundLine {
 const BYTES_PER_SOURCE_CELL: f64 = 200.0;
 const BYTES_PER_SOURCE_TRIANGLE: f64 = 64.0;
 
-/// Refuses a run whose coefficients would not fit in `free` bytes, one line.
-fn check_memory(scene: &Scene, sources: usize, free: Option<f64>) -> Result<()> {
+/// Bytes per analysed cell and lit hour: the hourly illuminance, the sun's part and
+/// their σ (f32 each).
+const BYTES_PER_CELL_HOUR: f64 = 16.0;
+
+/// Refuses a run whose coefficients and hourly illuminance would not fit in `free`
+/// bytes, one line.
+fn check_memory(
+    scene: &Scene,
+    matrix: &SkyMatrix,
+    sources: usize,
+    free: Option<f64>,
+) -> Result<()> {
     let cells: usize = scene.receivers.iter().map(|r| r.cell_count() + 1).sum();
+    let analysed: usize = (scene.annual.iter().flat_map(|a| &a.receivers))
+        .map(|&r| scene.receivers[r].cell_count())
+        .sum();
     let triangles = scene.geometry.triangle_count();
     let bytes = sources as f64
-        * (cells as f64 * BYTES_PER_SOURCE_CELL + triangles as f64 * BYTES_PER_SOURCE_TRIANGLE);
+        * (cells as f64 * BYTES_PER_SOURCE_CELL + triangles as f64 * BYTES_PER_SOURCE_TRIANGLE)
+        + (matrix.hours.len() * analysed) as f64 * BYTES_PER_CELL_HOUR;
     match free {
         Some(free) if bytes > 0.8 * free => Err(Error::input(
             format!("{}: annual", scene.path.display()),
             format!(
-                "{sources} sources × {cells} cells and {triangles} triangles need ≈ {:.0} MB of \
-                 memory, {:.0} MB is available: use a coarser mf or sun_mf, or fewer receivers",
+                "{sources} sources × {cells} cells and {triangles} triangles, and {} lit hours of \
+                 {analysed} cells, need ≈ {:.0} MB of memory, {:.0} MB is available: use a \
+                 coarser mf or sun_mf, or fewer receivers",
+                matrix.hours.len(),
                 bytes * 1e-6,
                 free * 1e-6
             ),
@@ -185,7 +201,7 @@ pub fn run(
     let matrix = SkyMatrix::new(&weather, annual)?;
     let matrix_s = matrix_clock.elapsed().as_secs_f64();
     let sources = sources(&matrix, &scene.portals);
-    check_memory(scene, sources.len(), storage.free_bytes)?;
+    check_memory(scene, &matrix, sources.len(), storage.free_bytes)?;
     let mut base = scene.clone();
     base.requirements.clear();
     base.daylight_factor = None;

@@ -35,7 +35,7 @@ fn receiver_json(f: &ReceiverFigures) -> Value {
         "ase_1000_250": interval(&f.ase),
         "blinds_closed_hours_fraction": interval(&f.blinds_hours),
         "leed_v4_1_sda_points": { "low": f.leed_points[0], "high": f.leed_points[1] },
-        "ase_over_10_percent": crate::annual::metrics::verdict(f.ase.low > 0.1, f.ase.value > 0.1, f.ase.high > 0.1),
+        "ase_over_10_percent": f.ase_over_10_percent(),
         "en17037": levels,
     })
 }
@@ -141,7 +141,7 @@ fn lit_hours(result: &AnnualResult) -> Vec<Option<usize>> {
 }
 
 /// Per record: its stamp, whether occupied, the receiver's mean illuminance and an upper
-/// bound of its σ (the mean of the cells' σ: the cells' errors correlate at most fully).
+/// bound of its σ ([`Hourly::receiver_mean`]).
 fn write_hours(path: &Path, result: &AnnualResult, h: &Hourly) -> Result<()> {
     let lit = lit_hours(result);
     write_atomic(path, |w| {
@@ -152,10 +152,7 @@ fn write_hours(path: &Path, result: &AnnualResult, h: &Hourly) -> Result<()> {
         for (record, &[month, day, hour, occupied]) in result.matrix.stamps.iter().enumerate() {
             let (mut gh, mut mean, mut sd) = (0.0, 0.0, 0.0);
             if let Some(t) = lit[record] {
-                let n = h.cells.max(1) as f64;
-                let range = t * h.cells..(t + 1) * h.cells;
-                mean = h.e[range.clone()].iter().map(|&x| x as f64).sum::<f64>() / n;
-                sd = h.sigma[range].iter().map(|&x| x as f64).sum::<f64>() / n;
+                (mean, sd) = h.receiver_mean(t);
                 gh = result.matrix.hours[t].global_horizontal_lx;
             }
             writeln!(
@@ -248,12 +245,9 @@ fn receiver_rows(values: &[f64], shape: [u32; 2]) -> Vec<f64> {
 fn temporal(result: &AnnualResult, h: &Hourly) -> (Vec<f64>, Vec<f64>, usize) {
     let days = result.matrix.records.div_ceil(24);
     let (mut mean, mut rel) = (vec![0.0; days * 24], vec![f64::NAN; days * 24]);
-    let n = h.cells.max(1) as f64;
     for (t, hour) in result.matrix.hours.iter().enumerate() {
         let (day, row) = (hour.record / 24, hour.record % 24);
-        let range = t * h.cells..(t + 1) * h.cells;
-        let e = h.e[range.clone()].iter().map(|&x| x as f64).sum::<f64>() / n;
-        let s = h.sigma[range].iter().map(|&x| x as f64).sum::<f64>() / n;
+        let (e, s) = h.receiver_mean(t);
         mean[row * days + day] = e;
         rel[row * days + day] = if e > 0.0 { s / e } else { f64::NAN };
     }
@@ -298,8 +292,7 @@ fn receiver_html(result: &AnnualResult, f: &ReceiverFigures, h: &Hourly) -> Resu
         )
     };
     let mut html = format!("<h2>Receiver {}</h2>\n<table>\n", escape(&f.name));
-    let ase_note =
-        crate::annual::metrics::verdict(f.ase.low > 0.1, f.ase.value > 0.1, f.ase.high > 0.1);
+    let ase_note = f.ase_over_10_percent();
     let rows = [
         ("sDA300/50 % (2 % blinds rule)".to_string(), pct(&f.sda)),
         (

@@ -133,16 +133,15 @@ impl<'r, 's> Epochs<'r, 's> {
         let tracer = &self.engine.tracer;
         let pool = &self.engine.pool;
         let mut local = |chunks: &[(u64, u32)], results: &mut [ChunkTally]| {
-            pool.install(|| {
-                chunks
-                    .par_iter()
-                    .zip(results.par_iter_mut())
-                    .for_each(|(&(first, n), tally)| {
-                        SCRATCH.with_borrow_mut(|scratch| {
-                            tracer.trace_chunk_into(first, n, scratch, tally)
-                        })
-                    })
-            })
+            let mut traced = vec![false; chunks.len()];
+            trace_on(
+                pool,
+                tracer,
+                chunks,
+                results,
+                &mut traced,
+                &AtomicBool::new(false),
+            );
         };
         let kept = match self.distributor.as_deref_mut() {
             Some(d) => {
@@ -150,23 +149,10 @@ impl<'r, 's> Epochs<'r, 's> {
                 chunks.len()
             }
             None => {
-                let traced = &mut self.traced;
-                traced.clear();
-                traced.resize(chunks.len(), false);
-                pool.install(|| {
-                    (chunks.par_iter().zip(results.par_iter_mut()))
-                        .zip(traced.par_iter_mut())
-                        .for_each(|((&(first, n), tally), traced)| {
-                            if interrupt.load(Ordering::Relaxed) {
-                                return;
-                            }
-                            SCRATCH.with_borrow_mut(|scratch| {
-                                tracer.trace_chunk_into(first, n, scratch, tally)
-                            });
-                            *traced = true;
-                        })
-                });
-                traced.iter().take_while(|&&t| t).count()
+                self.traced.clear();
+                self.traced.resize(chunks.len(), false);
+                trace_on(pool, tracer, &chunks, results, &mut self.traced, interrupt);
+                self.traced.iter().take_while(|&&t| t).count()
             }
         };
         let merge_start = Instant::now();
@@ -344,4 +330,28 @@ fn next_epoch_photons(
     let chunks = (photons / CHUNK_PHOTONS as f64).ceil() as u64;
     // At least a chunk per thread: a smaller epoch leaves threads idle.
     chunks.clamp(threads as u64, 1 << 16) * CHUNK_PHOTONS
+}
+
+/// Traces `chunks` into `results` on `pool`, marking each chunk traced in `traced`; once
+/// `interrupt` is set, chunks not yet started stay untraced.
+fn trace_on(
+    pool: &rayon::ThreadPool,
+    tracer: &crate::trace::Tracer<'_>,
+    chunks: &[(u64, u32)],
+    results: &mut [ChunkTally],
+    traced: &mut [bool],
+    interrupt: &AtomicBool,
+) {
+    pool.install(|| {
+        (chunks.par_iter().zip(results.par_iter_mut()))
+            .zip(traced.par_iter_mut())
+            .for_each(|((&(first, n), tally), traced)| {
+                if interrupt.load(Ordering::Relaxed) {
+                    return;
+                }
+                SCRATCH
+                    .with_borrow_mut(|scratch| tracer.trace_chunk_into(first, n, scratch, tally));
+                *traced = true;
+            })
+    });
 }

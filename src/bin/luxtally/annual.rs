@@ -4,8 +4,6 @@ use luxtally::accel::{self, Backend};
 use luxtally::run::RunOptions;
 use luxtally::{Error, Result};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 
 #[derive(clap::Args)]
 pub struct AnnualArgs {
@@ -86,15 +84,7 @@ pub fn command(args: AnnualArgs) -> Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(format!("{}_annual", scene.name)));
     let caster = accel::build_with(options.backend, options.bvh, &scene.geometry)?;
-    let interrupt = Arc::new(AtomicBool::new(false));
-    {
-        let flag = interrupt.clone();
-        let _ = ctrlc::set_handler(move || {
-            if flag.swap(true, Ordering::SeqCst) {
-                std::process::exit(130);
-            }
-        });
-    }
+    let interrupt = crate::photon_pass::interrupt_on_ctrl_c();
     let checkpoints = out.join("annual_checkpoints");
     if args.resume && !checkpoints.is_dir() {
         return Err(Error::input(

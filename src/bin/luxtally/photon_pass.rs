@@ -25,16 +25,7 @@ pub fn photon_pass(
     out: &Path,
     distributor: Option<Box<dyn Distributor>>,
 ) -> Result<RunResult> {
-    let interrupt = Arc::new(AtomicBool::new(false));
-    {
-        let flag = interrupt.clone();
-        // A second Ctrl-C ends the process at once.
-        let _ = ctrlc::set_handler(move || {
-            if flag.swap(true, Ordering::SeqCst) {
-                std::process::exit(130);
-            }
-        });
-    }
+    let interrupt = interrupt_on_ctrl_c();
     let mut start = start_of(args, scene, options, out)?;
     start.distributor = distributor;
     let shard = start.shard;
@@ -264,4 +255,17 @@ fn bounce_cap_verdict(s: &summary::Summary) -> String {
              ({k} photons stopped), is not below 1 % of the error"
         ),
     }
+}
+
+/// A flag the first Ctrl-C sets (the run stops at its next chunk and writes its
+/// outputs); a second one ends the process at once.
+pub fn interrupt_on_ctrl_c() -> Arc<AtomicBool> {
+    let interrupt = Arc::new(AtomicBool::new(false));
+    let flag = interrupt.clone();
+    let _ = ctrlc::set_handler(move || {
+        if flag.swap(true, Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    });
+    interrupt
 }
