@@ -121,6 +121,9 @@ pub struct AnnualResult {
     pub coefficients: Coefficients,
     pub hourly: Vec<Hourly>,
     pub figures: AnnualFigures,
+    /// Per analysed receiver: the sources none of whose photons reached it, whose
+    /// coefficients are bounded ([`bound_unreached`]) rather than known.
+    pub unreached_sources: Vec<Vec<usize>>,
     pub rounds: Vec<RoundLine>,
     pub photons: u64,
     pub rays: u64,
@@ -207,23 +210,37 @@ pub fn run(
     base.daylight_factor = None;
     let mut options = options.clone();
     options.estimator = Some(Estimator::NextEvent);
+    let sphere = crate::trace::emit::bounding_sphere(&base);
+    let fluxes: Vec<f64> = sources.iter().map(|s| s.light.flux_lm(&sphere)).collect();
     let clock = Instant::now();
     let mut records: Vec<Option<Progress>> = (0..sources.len()).map(|_| None).collect();
     let mut coefficients: Coefficients = vec![Vec::new(); sources.len()];
+    let mut floors = vec![0u64; sources.len()];
     let mut rounds = Vec::new();
     let mut total = annual.photons;
     for index in 0.. {
+        let wants: Vec<u64> = (sources.iter().zip(&floors))
+            .map(|(s, &floor)| source_photons(s.share, total).max(floor))
+            .collect();
         trace_round(
             &mut base,
             &options,
             caster,
             &sources,
-            total,
+            &wants,
             &mut records,
             &mut coefficients,
             storage,
             interrupt,
         )?;
+        let traced: Vec<u64> = (records.iter())
+            .map(|p| p.as_ref().map_or(0, |p| p.tallies.photons))
+            .collect();
+        let unreached = bound_unreached(&mut coefficients, &fluxes, &traced);
+        // An unreached source's bound shrinks only with its own photons: double them.
+        for &k in unreached.iter().flatten() {
+            floors[k] = floors[k].max(2 * traced[k]);
+        }
         let hourly = metrics::hourly_all(&matrix, &sources, &coefficients, annual.receivers.len());
         let figures = AnnualFigures::new(&matrix, &hourly, scene, annual);
         let photons: u64 = records.iter().flatten().map(|p| p.tallies.photons).sum();
@@ -268,6 +285,7 @@ pub fn run(
                 coefficients,
                 hourly,
                 figures: round.figures,
+                unreached_sources: unreached,
                 rounds,
                 photons,
                 rays,
@@ -299,7 +317,7 @@ fn source_dir(dir: &std::path::Path, k: usize) -> std::path::PathBuf {
     dir.join(format!("{k:05}"))
 }
 
-/// Traces every source up to its share of `total` photons (going on from its record, or
+/// Traces every source up to its `wants` photons (going on from its record, or
 /// from its checkpoint when resuming), saves its checkpoint and refreshes its
 /// coefficients.
 #[allow(clippy::too_many_arguments)]
@@ -308,7 +326,7 @@ fn trace_round(
     options: &RunOptions,
     caster: &dyn RayCaster,
     sources: &[Source],
-    total: u64,
+    wants: &[u64],
     records: &mut [Option<Progress>],
     coefficients: &mut Coefficients,
     storage: &Storage<'_>,
@@ -325,7 +343,7 @@ fn trace_round(
         }];
         let mut opts = options.clone();
         opts.seed = crate::rng::sub_seed(options.seed, k as u64);
-        let want = source_photons(source.share, total);
+        let want = wants[k];
         opts.stop = crate::criteria::StopCriteria {
             photons: Some(want),
             ..Default::default()
@@ -371,6 +389,52 @@ fn trace_round(
             .collect();
     }
     Ok(())
+}
+
+/// −ln(0.025): with no history scoring among N, the two-sided 95 % upper bound of the
+/// chance that one does is this over N (the rule of three's two-sided form).
+const NONE_SCORED_95: f64 = 3.689;
+
+/// Gives the receivers that none of a source's photons reached a variance instead of 0:
+/// their coefficient 0 is only known to be below the 95 % bound [`NONE_SCORED_95`]/N
+/// times what a scoring history carries, taken per unit flux as the largest mean that
+/// any source reaching the receiver had (the variance is that bound over 1.96, squared).
+/// Sources with no light in the scene keep 0 exactly. A receiver no source reached keeps
+/// its zeros: it is dark. `fluxes` and `photons` are per source; returns per receiver
+/// the sources so bounded.
+pub fn bound_unreached(
+    coefficients: &mut Coefficients,
+    fluxes: &[f64],
+    photons: &[u64],
+) -> Vec<Vec<usize>> {
+    let receivers = coefficients.iter().map(Vec::len).max().unwrap_or(0);
+    let mut unreached = vec![Vec::new(); receivers];
+    for (r, unreached) in unreached.iter_mut().enumerate() {
+        let per_flux = |k: usize, cells: &[CellEstimate]| {
+            let scored: u64 = cells.iter().map(|c| c.scoring_histories).sum();
+            let value: f64 = cells.iter().map(|c| c.value - c.direct).sum();
+            (scored > 0 && fluxes[k] > 0.0)
+                .then(|| value.max(0.0) * photons[k] as f64 / (scored as f64 * fluxes[k]))
+        };
+        let largest = (coefficients.iter().enumerate())
+            .filter_map(|(k, c)| c.get(r).and_then(|cells| per_flux(k, cells)))
+            .fold(0.0, f64::max);
+        for (k, per_receiver) in coefficients.iter_mut().enumerate() {
+            let Some(cells) = per_receiver.get_mut(r) else {
+                continue;
+            };
+            let reached = cells.iter().any(|c| c.scoring_histories > 0);
+            if fluxes[k] <= 0.0 || photons[k] == 0 || reached {
+                continue;
+            }
+            unreached.push(k);
+            let bound = NONE_SCORED_95 / photons[k] as f64 * largest * fluxes[k];
+            for c in cells {
+                c.var = c.direct_var + (bound / 1.96) * (bound / 1.96);
+            }
+        }
+    }
+    unreached
 }
 
 /// Source's record from its checkpoint in `dir`, if there is one, checked against the
@@ -452,7 +516,12 @@ pub fn result_text(scene: &Scene, result: &AnnualResult, out: &std::path::Path) 
     if untraced > 0 {
         text += &format!("  incomplete: {untraced} sources were not traced (interrupted): the figures miss their light\n");
     }
-    for r in &result.figures.receivers {
+    for (r, unreached) in result
+        .figures
+        .receivers
+        .iter()
+        .zip(&result.unreached_sources)
+    {
         let pct = |i: &metrics::Interval| {
             format!(
                 "{:.1} % (95 % {:.1}–{:.1} %)",
@@ -474,6 +543,12 @@ pub fn result_text(scene: &Scene, result: &AnnualResult, out: &std::path::Path) 
             text += &format!(
                 "    EN 17037 {name} level: {verdict} ({} of daylight hours)\n",
                 pct(fraction)
+            );
+        }
+        if !unreached.is_empty() {
+            text += &format!(
+                "    {} sources reached none of its cells: their light there is bounded, not known\n",
+                unreached.len()
             );
         }
     }

@@ -31,6 +31,10 @@ pub struct SkyHour {
     pub ground_cdm2: f64,
     /// The sun's bin (index into [`SkyMatrix::suns`]) and its direct normal illuminance.
     pub sun: Option<(usize, f64)>,
+    /// The hour's own sun position (unit, towards the sun), before binning.
+    pub sun_position: DVec3,
+    /// Diffuse horizontal illuminance of the Perez sky, lx.
+    pub diffuse_horizontal_lx: f64,
     /// Unobstructed global horizontal illuminance (sky and sun), lx.
     pub global_horizontal_lx: f64,
 }
@@ -200,6 +204,8 @@ fn record_sky(
             patches: means,
             ground_cdm2: annual.ground_reflectance * global / PI,
             sun: lit_sun.map(|_| (usize::MAX, direct_normal)),
+            sun_position: sun,
+            diffuse_horizontal_lx: perez.diffuse_horizontal_lx,
             global_horizontal_lx: global,
         },
         lit_sun,

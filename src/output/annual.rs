@@ -9,6 +9,7 @@ use super::{file_stem, write_atomic};
 use crate::annual::metrics::{Hourly, Interval, ReceiverFigures};
 use crate::annual::AnnualResult;
 use crate::error::{Error, Result};
+use crate::light::sun::altitude_azimuth_deg;
 use crate::scene::Scene;
 use serde_json::{json, Value};
 use std::io::Write;
@@ -22,7 +23,7 @@ fn interval(i: &Interval) -> Value {
     json!({ "value": i.value, "low": i.low, "high": i.high })
 }
 
-fn receiver_json(f: &ReceiverFigures) -> Value {
+fn receiver_json(f: &ReceiverFigures, unreached_sources: usize) -> Value {
     let levels: Vec<Value> = (f.en17037.iter())
         .map(|(name, fraction, verdict)| json!({ "level": name, "daylight_hours_fraction": interval(fraction), "verdict": verdict }))
         .collect();
@@ -37,6 +38,7 @@ fn receiver_json(f: &ReceiverFigures) -> Value {
         "leed_v4_1_sda_points": { "low": f.leed_points[0], "high": f.leed_points[1] },
         "ase_over_10_percent": f.ase_over_10_percent(),
         "en17037": levels,
+        "unreached_sources": unreached_sources,
     })
 }
 
@@ -72,7 +74,9 @@ pub fn write_annual(out: &Path, scene: &Scene, result: &AnnualResult) -> Result<
         "elapsed_s": result.elapsed_s,
         "stop_reason": result.stop_reason,
         "rounds": result.rounds.iter().map(|r| json!({ "photons": r.photons, "elapsed_s": r.elapsed_s, "sda_halfwidth": r.sda_halfwidth })).collect::<Vec<_>>(),
-        "receivers": result.figures.receivers.iter().map(receiver_json).collect::<Vec<_>>(),
+        "receivers": (result.figures.receivers.iter().zip(&result.unreached_sources))
+            .map(|(f, u)| receiver_json(f, u.len()))
+            .collect::<Vec<_>>(),
     });
     let path = out.join("annual.json");
     let text = serde_json::to_string_pretty(&summary).expect("plain JSON values");
@@ -140,24 +144,31 @@ fn lit_hours(result: &AnnualResult) -> Vec<Option<usize>> {
     out
 }
 
-/// Per record: its stamp, whether occupied, the receiver's mean illuminance and an upper
+/// Per record: its stamp, whether occupied, the hour's own sun position and the sky's
+/// direct normal, diffuse and global horizontal illuminance, the receiver's mean illuminance and an upper
 /// bound of its σ ([`Hourly::receiver_mean`]).
 fn write_hours(path: &Path, result: &AnnualResult, h: &Hourly) -> Result<()> {
     let lit = lit_hours(result);
     write_atomic(path, |w| {
         writeln!(
             w,
-            "record,month,day,hour,occupied,global_horizontal_lx,mean_lx,mean_sigma_bound_lx"
+            "record,month,day,hour,occupied,sun_altitude_deg,sun_azimuth_deg,direct_normal_lx,\
+             diffuse_horizontal_lx,global_horizontal_lx,mean_lx,mean_sigma_bound_lx"
         )?;
         for (record, &[month, day, hour, occupied]) in result.matrix.stamps.iter().enumerate() {
-            let (mut gh, mut mean, mut sd) = (0.0, 0.0, 0.0);
-            if let Some(t) = lit[record] {
-                (mean, sd) = h.receiver_mean(t);
-                gh = result.matrix.hours[t].global_horizontal_lx;
-            }
+            let Some(t) = lit[record] else {
+                writeln!(w, "{record},{month},{day},{hour},{occupied},,,0,0,0,0,0")?;
+                continue;
+            };
+            let sky = &result.matrix.hours[t];
+            let (mean, sd) = h.receiver_mean(t);
+            let (altitude, azimuth) = altitude_azimuth_deg(sky.sun_position);
+            let direct = sky.sun.map_or(0.0, |s| s.1);
+            let (diffuse, global) = (sky.diffuse_horizontal_lx, sky.global_horizontal_lx);
             writeln!(
                 w,
-                "{record},{month},{day},{hour},{occupied},{gh:.2},{mean:.4},{sd:.4}"
+                "{record},{month},{day},{hour},{occupied},{altitude:.4},{azimuth:.4},{direct:.2},\
+                 {diffuse:.2},{global:.2},{mean:.4},{sd:.4}"
             )?;
         }
         Ok(())

@@ -62,6 +62,8 @@ pub struct CellEstimate {
     pub direct: f64,
     pub direct_var: f64,
     pub hits: u64,
+    /// Photon histories that scored here (of the run's photons).
+    pub scoring_histories: u64,
 }
 
 /// Every cell's [`CellEstimate`] (variances as [`cell_values`]' σ, with the pooled photon
@@ -76,6 +78,7 @@ pub fn cell_estimates(cells: &[CellSums], shape: [u32; 2], counts: Counts) -> Ve
             direct: direct_part(c, counts).0 * counts.unit,
             direct_var: direct_var * unit2,
             hits: c.hits,
+            scoring_histories: c.scoring_histories,
         })
         .collect()
 }

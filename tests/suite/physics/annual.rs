@@ -271,6 +271,8 @@ fn annual_intervals_cover_a_precise_run() {
     let scene = annual_scene(&dir, &march_fortnight(), &table(1 << 20));
     let (mut cells, mut covered, mut sda_covered, mut ase_covered, mut z2) =
         (0, 0, 0, 0, Vec::new());
+    let (mut unreached, mut unreached_covered, mut unreached_lit) = (0, 0, 0);
+    let mut tightest = 0.0f64;
     let mut widths = [0.0; 2];
     let seeds = 16;
     for seed in 0..seeds {
@@ -284,6 +286,19 @@ fn annual_intervals_cover_a_precise_run() {
             widths[0] += c.da.halfwidth();
         }
         sda_covered += (f.sda.low <= truth.sda.value && truth.sda.value <= f.sda.high) as usize;
+        for &k in &r.unreached_sources[0] {
+            for (c, t) in r.coefficients[k][0]
+                .iter()
+                .zip(&reference.coefficients[k][0])
+            {
+                unreached += 1;
+                unreached_lit += (t.value > 0.0) as usize;
+                let photon_var = c.var - c.direct_var;
+                let bound = 1.96 * photon_var.sqrt();
+                unreached_covered += (t.value - t.direct <= bound) as usize;
+                tightest = tightest.max((t.value - t.direct) / bound);
+            }
+        }
         let (h, href) = (&r.hourly[0], &reference.hourly[0]);
         for k in 0..h.e.len() {
             let sd = ((h.sigma[k] as f64).powi(2) + (href.sigma[k] as f64).powi(2)).sqrt();
@@ -317,6 +332,21 @@ fn annual_intervals_cover_a_precise_run() {
         ase_share >= floor(cells),
         "ASE hours' intervals cover {ase_share:.3} of {cells} cells"
     );
+    // Sources none of whose photons reached the grid: their bound holds what the
+    // precise run's photons found there.
+    eprintln!(
+        "unreached source × cell pairs {unreached} ({unreached_lit} lit in the precise run), \
+         {unreached_covered} under their bound (the largest at {tightest:.3} of it)"
+    );
+    assert!(
+        unreached_lit > 0,
+        "no unreached source that the precise run saw light from"
+    );
+    let unreached_share = unreached_covered as f64 / unreached as f64;
+    assert!(
+        unreached_share >= floor(unreached),
+        "unreached sources' bounds hold {unreached_share:.3} of {unreached}"
+    );
     let rms = (z2.iter().sum::<f64>() / z2.len() as f64).sqrt();
     eprintln!("hourly z-RMS {rms:.3} over {} cell-hours", z2.len());
     assert!((0.8..1.25).contains(&rms), "hourly z-RMS {rms:.3}");
@@ -345,6 +375,22 @@ fn annual_files_hold_the_results() {
     assert_eq!(csv.lines().count(), 1 + 24);
     let hours = std::fs::read_to_string(out.join("annual_df_grid_hours.csv")).unwrap();
     assert_eq!(hours.lines().count(), 1 + 24);
+    // The noon hour (stamp 13): its sun and sky as the sky matrix has them, and
+    // global = diffuse + direct normal × sin(altitude).
+    let noon: Vec<f64> = (hours.lines().nth(13).unwrap().split(',').skip(5).take(5))
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let sky = result.matrix.hours.iter().find(|h| h.record == 12).unwrap();
+    let [altitude, _, direct, diffuse, global] = noon[..] else {
+        unreachable!()
+    };
+    assert!((altitude.to_radians().sin() - sky.sun_position.z).abs() < 1e-4);
+    assert!((diffuse - sky.diffuse_horizontal_lx).abs() < 0.01);
+    let sum = diffuse + direct * altitude.to_radians().sin();
+    assert!(
+        (global - sum).abs() < 1e-4 * global,
+        "{global} against {sum}"
+    );
     let bin = std::fs::read(out.join("annual_df_grid_hourly.bin")).unwrap();
     let cells = 24;
     assert_eq!(&bin[..8], luxtally::output::annual::HOURLY_MAGIC);
