@@ -131,6 +131,12 @@ impl ReceiverGrid {
         }
     }
 
+    /// A luminance meter whose direct light is sampled: it samples the sources' light
+    /// reflected towards it by the surfaces it sees too (`trace::reflected`).
+    pub fn samples_reflected_direct(&self) -> bool {
+        matches!(self.kind, Kind::Luminance { .. }) && self.estimator.direct_by_replicates()
+    }
+
     pub fn cell_count(&self) -> usize {
         self.cells[0] as usize * self.cells[1] as usize
     }

@@ -201,6 +201,7 @@ struct Scratch {
     light_permutation: Vec<u32>,
     /// Per replicate of a block: the sum of its unoccluded weights.
     totals: Vec<f64>,
+    reflected: super::reflected::Scratch,
 }
 
 /// Replicates of one cell whose shadow rays are cast together.
@@ -213,6 +214,9 @@ pub struct DirectLight<'a> {
     /// How far from a surface (m) a receiver still counts as lying on it.
     pub slack: f64,
     pub seed: u64,
+    /// The surfaces luminance meters see the sources' light reflected by
+    /// ([`super::reflected`]); `None`: meters take only the sources they see directly.
+    pub reflectors: Option<&'a super::reflected::Reflectors>,
 }
 
 impl DirectLight<'_> {
@@ -403,6 +407,16 @@ impl DirectLight<'_> {
                     s.totals[r as usize] += w * through;
                 }
             }
+            rays += self.add_reflected(
+                grid,
+                (i, j),
+                m,
+                cell,
+                block_start,
+                &mut s.totals,
+                &mut s.reflected,
+                &mut s.shadow,
+            );
             for &y in &s.totals {
                 // In the run's score unit (exact: a power of two).
                 sums.add_direct(y / self.emitters.score_unit);
@@ -455,7 +469,7 @@ impl DirectLight<'_> {
 }
 
 /// A uniformly random permutation of 0..n into `out` (Fisher–Yates).
-fn shuffle(out: &mut Vec<u32>, n: u32, rng: &mut Pcg32) {
+pub(super) fn shuffle(out: &mut Vec<u32>, n: u32, rng: &mut Pcg32) {
     out.clear();
     out.extend(0..n);
     for k in (1..n as usize).rev() {

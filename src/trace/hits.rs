@@ -330,7 +330,7 @@ impl Tracer<'_> {
                     -dir,
                     surfacing,
                     (offset, &mut out.survivors.rng[k]),
-                    flux * weight,
+                    (flux * weight, !indirect),
                     &mut s.shadow_rays,
                     &mut s.shadow_scores,
                 );

@@ -26,6 +26,7 @@ pub mod endless;
 mod hits;
 mod portal_photons;
 pub mod receiver_reach;
+pub mod reflected;
 pub mod scatter;
 pub mod shadow;
 
@@ -63,6 +64,8 @@ pub struct Tracer<'a> {
     surface_table: Vec<TriangleSurface>,
     /// BSDF and its bounce flags per material.
     surfacings: Vec<Surfacing>,
+    /// What luminance meters' reflected direct light reads ([`reflected`]).
+    reflectors: reflected::Reflectors,
     pub emitters: Emitters,
     pub receivers: Vec<ReceiverGrid>,
     seed: u64,
@@ -149,6 +152,7 @@ impl<'a> Tracer<'a> {
             geometry: g,
             surface_table: TriangleSurface::table(g),
             surfacings,
+            reflectors: reflected::Reflectors::new(scene),
             emitters,
             seed,
             max_bounces: cap,
@@ -185,6 +189,7 @@ impl<'a> Tracer<'a> {
             shadows: &self.shadows,
             slack: self.receiver_slack,
             seed: self.seed,
+            reflectors: Some(&self.reflectors),
         }
     }
 
@@ -480,6 +485,8 @@ impl<'a> Tracer<'a> {
     /// score, w·f(wo, wi)·|cos θ_i| times the connection's factor (w·ρ·cos θ/π for a
     /// Lambertian surface), queued behind a shadow ray. It does not depend on what the
     /// roulette then picks. `lane` is the photon's offset in the chunk and its stream.
+    /// A vertex `lit_directly` (its photon came straight from its source) leaves the
+    /// meters that sample reflected direct light to them ([`reflected`]).
     #[allow(clippy::too_many_arguments)]
     #[inline]
     fn connect(
@@ -489,7 +496,7 @@ impl<'a> Tracer<'a> {
         wo: DVec3,
         surfacing: &Surfacing,
         (offset, rng): (u32, &mut Pcg32),
-        flux: f64,
+        (flux, lit_directly): (f64, bool),
         shadow_rays: &mut RayBatch,
         shadow_scores: &mut Vec<(u32, u32, f64)>,
     ) {
@@ -499,7 +506,7 @@ impl<'a> Tracer<'a> {
         for (r, stratum) in self
             .receivers
             .iter()
-            .filter(|r| r.estimator.connects())
+            .filter(|r| r.estimator.connects() && !(lit_directly && r.samples_reflected_direct()))
             .flat_map(|r| (0..r.connections).map(move |s| (r, s)))
         {
             let Some(c) = r.connect(p.as_dvec3(), stratum, rng) else {

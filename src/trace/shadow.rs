@@ -6,7 +6,7 @@
 //! the backend's occlusion path.
 
 use super::scatter::offset_origin;
-use crate::accel::{HitBatch, RayBatch, RayCaster};
+use crate::accel::{HitBatch, RayBatch, RayCaster, Surface};
 use crate::scene::{Geometry, Scene};
 use crate::surface::Glazing;
 use glam::Vec3;
@@ -38,6 +38,20 @@ pub struct ShadowScratch {
     /// Per ray of [`ShadowCaster::transmitted`]'s batch, how much of it lies past the
     /// last pane it crosses (∞ past none), in units of its direction's length.
     pub past_last_pane: Vec<f32>,
+    /// Per ray of [`ShadowCaster::first_opaque`]'s batch: the transmittance so far, and
+    /// where it first hit anything.
+    gain: Vec<f64>,
+    first_hit: Vec<f32>,
+}
+
+/// What a ray meets first past the panes it crosses ([`ShadowCaster::first_opaque`]).
+#[derive(Clone, Copy, Debug)]
+pub struct SeenThrough {
+    pub surface: Surface,
+    /// The product of the transmittances of the panes crossed (1 through none).
+    pub through: f64,
+    /// Where the ray first hit anything, pane or not, in units of its direction's length.
+    pub first_hit: f32,
 }
 
 impl<'a> ShadowCaster<'a> {
@@ -93,6 +107,76 @@ impl<'a> ShadowCaster<'a> {
         }
         for &i in &s.index {
             through[i as usize] = 0.0;
+        }
+        cast
+    }
+
+    /// Per ray, the first surface other than glazing it meets, into `out` (resized):
+    /// `None` where it escapes or is still in glass after [`MAX_GLAZING_CROSSINGS`]
+    /// panes. Panes pass it on unbent, times their T(θ), exactly as [`Self::transmitted`]
+    /// lets light through. Returns the rays cast.
+    pub fn first_opaque(
+        &self,
+        rays: &RayBatch,
+        out: &mut Vec<Option<SeenThrough>>,
+        s: &mut ShadowScratch,
+    ) -> u64 {
+        out.clear();
+        out.resize(rays.len(), None);
+        s.gain.clear();
+        s.gain.resize(rays.len(), 1.0);
+        s.first_hit.clear();
+        s.first_hit.resize(rays.len(), f32::INFINITY);
+        s.rays.clone_from(rays);
+        s.index.clear();
+        s.index.extend(0..rays.len() as u32);
+        let mut cast = 0;
+        for round in 0..MAX_GLAZING_CROSSINGS {
+            if s.rays.is_empty() {
+                break;
+            }
+            cast += s.rays.len() as u64;
+            self.caster.intersect(&s.rays, &mut s.hits);
+            s.next.clear();
+            s.next_index.clear();
+            let r = &s.rays;
+            for k in 0..r.len() {
+                let i = s.index[k] as usize;
+                let Some(surface) = s.hits.surface(k, self.geometry) else {
+                    continue;
+                };
+                if round == 0 {
+                    s.first_hit[i] = s.hits.t[k];
+                }
+                let pane = self
+                    .glazing
+                    .get(surface.material as usize)
+                    .and_then(Option::as_ref);
+                let Some(glazing) = pane else {
+                    out[i] = Some(SeenThrough {
+                        surface,
+                        through: s.gain[i],
+                        first_hit: s.first_hit[i],
+                    });
+                    continue;
+                };
+                let dir = Vec3::new(r.dx[k], r.dy[k], r.dz[k]);
+                let along = dir.normalize().dot(surface.normal);
+                s.gain[i] *= glazing.reflect_transmit(along.abs() as f64).1;
+                let leave = if along > 0.0 {
+                    surface.normal
+                } else {
+                    -surface.normal
+                };
+                let origin = offset_origin(surface.point, leave, self.scene_scale);
+                let rest = r.tfar[k] - s.hits.t[k];
+                if s.gain[i] > 0.0 && rest > 0.0 {
+                    s.next.push(origin.to_array(), dir.to_array(), 0.0, rest);
+                    s.next_index.push(i as u32);
+                }
+            }
+            std::mem::swap(&mut s.rays, &mut s.next);
+            std::mem::swap(&mut s.index, &mut s.next_index);
         }
         cast
     }

@@ -36,6 +36,7 @@ mod physics {
     mod physics;
     mod points;
     mod portal_photons;
+    mod reflected;
     mod render;
     mod surroundings;
     mod ugr;

@@ -439,3 +439,34 @@ pub fn epw(location: &str, days: usize) -> String {
 }
 
 pub const BERLIN: &str = "LOCATION,Berlin,BE,DEU,test,103840,52.47,13.40,1.0,49.0";
+
+/// The cross-check that no path is missed or counted twice: the analog estimator and
+/// next-event estimation (deterministic direct light, connections, near-zone and
+/// specular crossings) agree cell by cell within their combined σ.
+pub fn assert_estimators_agree(
+    scene: &luxtally::scene::Scene,
+    receiver: &str,
+    track_photons: u64,
+    next_event_photons: u64,
+) {
+    let with = |estimator, photons| RunOptions {
+        estimator: Some(estimator),
+        ..options(scene, photons, 2, Backend::Embree)
+    };
+    let track = run_options(scene, &with(Estimator::Track, track_photons));
+    let next = run_options(scene, &with(Estimator::NextEvent, next_event_photons));
+    let (a, b) = (&track.receivers[receiver], &next.receivers[receiver]);
+    assert_eq!(
+        (a.estimator.as_str(), b.estimator.as_str()),
+        ("track", "next_event")
+    );
+    let z: Vec<f64> = (0..a.values.len())
+        .map(|k| (a.values[k] - b.values[k]) / libm::hypot(a.sigma[k], b.sigma[k]))
+        .collect();
+    let r = rms(&z);
+    eprintln!(
+        "{receiver}: track vs next_event: z RMS {r:.3} over {} cells",
+        z.len()
+    );
+    assert!((0.8..=1.25).contains(&r), "z RMS {r}");
+}

@@ -265,43 +265,6 @@ fn receiver_no_photon_reaches_reads_zero_with_unknown_error() {
     );
 }
 
-/// The cross-check that no path is missed or counted twice: the analog estimator and
-/// next-event estimation (deterministic direct light, connections, near-zone and
-/// specular crossings) agree cell by cell within their combined σ.
-fn assert_estimators_agree(
-    scene: &luxtally::scene::Scene,
-    receiver: &str,
-    track_photons: u64,
-    next_event_photons: u64,
-) {
-    let with = |estimator, photons| luxtally::run::RunOptions {
-        estimator: Some(estimator),
-        ..options(scene, photons, 2, Backend::Embree)
-    };
-    let track = run_options(
-        scene,
-        &with(luxtally::scene::Estimator::Track, track_photons),
-    );
-    let next = run_options(
-        scene,
-        &with(luxtally::scene::Estimator::NextEvent, next_event_photons),
-    );
-    let (a, b) = (&track.receivers[receiver], &next.receivers[receiver]);
-    assert_eq!(
-        (a.estimator.as_str(), b.estimator.as_str()),
-        ("track", "next_event")
-    );
-    let z: Vec<f64> = (0..a.values.len())
-        .map(|k| (a.values[k] - b.values[k]) / libm::hypot(a.sigma[k], b.sigma[k]))
-        .collect();
-    let r = rms(&z);
-    eprintln!(
-        "{receiver}: track vs next_event: z RMS {r:.3} over {} cells",
-        z.len()
-    );
-    assert!((0.8..=1.25).contains(&r), "z RMS {r}");
-}
-
 #[test]
 fn track_and_next_event_agree_on_every_office_desk_cell() {
     assert_estimators_agree(&office(), "desk", 10_000_000, 1_000_000);

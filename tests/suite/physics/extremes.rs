@@ -181,6 +181,7 @@ fn cell_moments_match_a_high_precision_recomputation_from_the_replicates() {
         shadows: &luxtally::trace::shadow::ShadowCaster::new(&scene, caster.as_ref()),
         slack: 1e-6,
         seed: 3,
+        reflectors: None,
     };
     let sides = direct.cell_sides(&grid);
     let replicates = 200u64;

@@ -6,8 +6,8 @@
 use crate::common;
 
 use common::{
-    assert_calibrated, cell_average, gauss8, mirror_image_cell_lx, options, point_in_sphere,
-    point_over_mirror, rms, run_options, run_scene, run_scene_with, z_scores,
+    assert_calibrated, assert_estimators_agree, cell_average, gauss8, mirror_image_cell_lx,
+    point_in_sphere, point_over_mirror, run_scene, run_scene_with, z_scores,
 };
 use glam::DVec3;
 use luxtally::accel::Backend;
@@ -451,32 +451,6 @@ fn glossy_floor_luminance_track() {
 #[test]
 fn glossy_floor_luminance_next_event() {
     glossy_floor_luminance(Estimator::NextEvent, 4_000_000);
-}
-
-/// Track and next-event estimates of every cell of `receiver` agree: z-score RMS of
-/// their differences in [0.8, 1.25] (as tests/suite/engine/engine.rs).
-fn assert_estimators_agree(
-    scene: &luxtally::scene::Scene,
-    receiver: &str,
-    track_photons: u64,
-    next_event_photons: u64,
-) {
-    let with = |estimator, photons| luxtally::run::RunOptions {
-        estimator: Some(estimator),
-        ..options(scene, photons, 2, Backend::Embree)
-    };
-    let track = run_options(scene, &with(Estimator::Track, track_photons));
-    let next = run_options(scene, &with(Estimator::NextEvent, next_event_photons));
-    let (a, b) = (&track.receivers[receiver], &next.receivers[receiver]);
-    let z: Vec<f64> = (0..a.values.len())
-        .map(|k| (a.values[k] - b.values[k]) / libm::hypot(a.sigma[k], b.sigma[k]))
-        .collect();
-    let r = rms(&z);
-    eprintln!(
-        "{receiver}: track vs next_event: z RMS {r:.3} over {} cells",
-        z.len()
-    );
-    assert!((0.8..=1.25).contains(&r), "{receiver}: z RMS {r}");
 }
 
 // ---- The eye pass ----
