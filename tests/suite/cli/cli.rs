@@ -562,3 +562,40 @@ fn annual_runs_and_refuses_bad_input_in_one_line() {
         );
     }
 }
+
+/// `bench-accuracy` ends with the rays to each goal down to its target: one row per
+/// goal, each run stopped at its error, photons and rays growing as the goal tightens.
+#[test]
+fn bench_accuracy_reports_the_rays_to_each_goal() {
+    let out = luxtally(&[
+        "bench-accuracy",
+        "scenes/office.toml",
+        "--target-error",
+        "0.02",
+        "--threads",
+        "2",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let header = "| goal % | photons | photon rays | direct rays | rays | elapsed s | error % |";
+    let table = text.split(header).nth(1).expect("the rays table");
+    let rows: Vec<Vec<f64>> = (table.lines().skip(2))
+        .take_while(|l| l.starts_with('|'))
+        .map(|l| {
+            (l.trim_matches('|').split('|'))
+                .map(|x| x.trim().parse().unwrap())
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 2, "goals 5 and 2 %: {table}");
+    for (row, goal) in rows.iter().zip([5.0, 2.0]) {
+        assert_eq!(row[0], goal);
+        assert!(row[6] <= goal, "error {} beyond its goal {goal}", row[6]);
+        assert_eq!(row[4], row[2] + row[3], "rays add up");
+    }
+    assert!(rows[1][1] > rows[0][1] && rows[1][4] > rows[0][4]);
+}

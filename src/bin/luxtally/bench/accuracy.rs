@@ -58,8 +58,9 @@ pub fn command(args: BenchAccuracyArgs) -> Result<()> {
 /// quadratic) on `receiver:NAME` or `time_limit_s`, and reports the error-versus-time
 /// history with the forecasts made along the way, the times to 5, 2 and 1 %, the FOM,
 /// the forecast made once 10 % of the photons were traced against what the run needed,
-/// and the share of run time spent on statistics and forecasts. `progress` is told
-/// when the run starts.
+/// the share of run time spent on statistics and forecasts, and the rays to each of
+/// 5, 2, 1 and 0.5 % down to `target` ([`rays_to_accuracy`]). `progress` is told
+/// when each run starts.
 fn bench_accuracy(
     scene: &Scene,
     receiver: &str,
@@ -106,6 +107,54 @@ fn bench_accuracy(
         let _ = writeln!(out, "{line}\n");
     }
     out += &history_table(h);
+    out += &rays_to_accuracy(scene, &options, target, progress)?;
+    Ok(out)
+}
+
+/// The accuracies [`rays_to_accuracy`] measures, those down to the run's target.
+const ACCURACY_GOALS: [f64; 4] = [0.05, 0.02, 0.01, 0.005];
+
+/// Rays to each of [`ACCURACY_GOALS`] down to `target` (Markdown): one run of `options`
+/// stopped at each, its photons, photon rays, direct-light rays and wall time. Separate
+/// runs, because the direct light's replicates come in steps the history does not
+/// record; the same seed, so each is the same run cut at its goal.
+fn rays_to_accuracy(
+    scene: &Scene,
+    options: &RunOptions,
+    target: f64,
+    progress: &dyn Fn(&str),
+) -> Result<String> {
+    let mut out = String::from(
+        "\n| goal % | photons | photon rays | direct rays | rays | elapsed s | error % |\n\
+         |---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for goal in ACCURACY_GOALS
+        .into_iter()
+        .filter(|&g| g >= target * (1.0 - 1e-9))
+    {
+        progress(&format!("rays to {:.1} %", 100.0 * goal));
+        let mut at_goal = options.clone();
+        at_goal.stop.target_error = Some(goal);
+        let clock = std::time::Instant::now();
+        let result = run(scene, &at_goal, &AtomicBool::new(false), &mut ())?;
+        let elapsed = clock.elapsed().as_secs_f64();
+        let t = &result.progress.tallies;
+        let error = result
+            .progress
+            .history
+            .last()
+            .map_or(f64::NAN, |p| p.rel_error);
+        let _ = writeln!(
+            out,
+            "| {:.1} | {} | {} | {} | {} | {elapsed:.3} | {:.3} |",
+            100.0 * goal,
+            t.photons,
+            t.rays,
+            t.direct_rays,
+            t.rays + t.direct_rays,
+            100.0 * error
+        );
+    }
     Ok(out)
 }
 
