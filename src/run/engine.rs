@@ -40,6 +40,8 @@ pub(crate) struct Engine<'s> {
     /// Per next-event receiver (in order), its cells' points per side in a direct
     /// replicate (`DirectLight::cell_sides`), computed at the first replicates.
     direct_sides: std::sync::OnceLock<Vec<Vec<u32>>>,
+    /// [`RunOptions::direct_points_per_side`].
+    direct_points: Option<u32>,
     /// Per observer, per luminaire: whether its line to the eye is blocked
     /// (`stats::ugr::occlusion`), for the observers' ratings and `ugr_max` checks.
     pub(crate) observer_visible: Vec<Vec<f64>>,
@@ -80,6 +82,7 @@ impl<'s> Engine<'s> {
             tracer,
             threads,
             direct_sides: std::sync::OnceLock::new(),
+            direct_points: options.direct_points_per_side,
             observer_visible,
         })
     }
@@ -165,7 +168,7 @@ impl<'s> Engine<'s> {
                     .receivers
                     .iter()
                     .filter(|g| g.estimator.direct_by_replicates())
-                    .map(|g| direct.cell_sides(g))
+                    .map(|g| direct.cell_sides(g, self.direct_points))
                     .collect()
             })
         })

@@ -37,6 +37,10 @@ pub struct RunOptions {
     pub bvh: Bvh,
     /// Overrides every receiver's `estimator` (`--estimator`).
     pub estimator: Option<Estimator>,
+    /// Points per side of a cell in a direct-light replicate (`None`: by the receiver's
+    /// cell count, `trace::direct::points_per_side`). Annual runs lower it for sources
+    /// whose direct light is a small part of every hour's variance.
+    pub direct_points_per_side: Option<u32>,
 }
 
 impl RunOptions {
@@ -49,6 +53,7 @@ impl RunOptions {
             backend: Backend::Embree,
             bvh: Bvh::Auto,
             estimator: None,
+            direct_points_per_side: None,
         }
     }
 

@@ -220,11 +220,14 @@ pub struct DirectLight<'a> {
 }
 
 impl DirectLight<'_> {
-    /// Points per side of each cell of `grid` in a replicate: [`points_per_side`], times
-    /// [`EDGE_REFINEMENT`] where [`crosses_light_edge`]. The lights and the geometry
-    /// alone decide it, so a run computes it once (in parallel over tiles of cells).
-    pub fn cell_sides(&self, grid: &ReceiverGrid) -> Vec<u32> {
-        let m = points_per_side(grid.cell_count());
+    /// Points per side of each cell of `grid` in a replicate: `points` or
+    /// [`points_per_side`], times [`EDGE_REFINEMENT`] where [`crosses_light_edge`]. The
+    /// lights and the geometry alone decide it, so a run computes it once (in parallel
+    /// over tiles of cells).
+    pub fn cell_sides(&self, grid: &ReceiverGrid, points: Option<u32>) -> Vec<u32> {
+        let m = points
+            .unwrap_or_else(|| points_per_side(grid.cell_count()))
+            .max(1);
         let [nu, nv] = grid.cells;
         let tile_cols = nu.min(TILE_CELLS);
         let tile_rows = (TILE_CELLS / tile_cols).clamp(1, nv);

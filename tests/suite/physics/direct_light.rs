@@ -537,7 +537,10 @@ fn cell_sides(toml: &str) -> (Vec<u32>, u32) {
         seed: 1,
         reflectors: None,
     };
-    (direct.cell_sides(&grid), points_per_side(grid.cell_count()))
+    (
+        direct.cell_sides(&grid, None),
+        points_per_side(grid.cell_count()),
+    )
 }
 
 /// The spot of [`spot_over_black_floor`] (2 m above its 3 m × 3 m receiver of 16 × 16

@@ -183,7 +183,7 @@ fn cell_moments_match_a_high_precision_recomputation_from_the_replicates() {
         seed: 3,
         reflectors: None,
     };
-    let sides = direct.cell_sides(&grid);
+    let sides = direct.cell_sides(&grid, None);
     let replicates = 200u64;
     let mut together = vec![CellSums::default(); grid.cell_count()];
     direct.add_replicates(&grid, &sides, &mut together, 0, replicates);
