@@ -251,14 +251,17 @@ fn receiver_rows(values: &[f64], shape: [u32; 2]) -> Vec<f64> {
         .collect()
 }
 
-/// The receiver mean per day (columns) and hour stamp (rows, hour 1 at the top), and
-/// its σ bound relative to it (NaN where dark).
-fn temporal(result: &AnnualResult, h: &Hourly) -> (Vec<f64>, Vec<f64>, usize) {
+/// An illuminance and its σ per lit hour `t` (`at(t)`) as a day (columns) by hour
+/// stamp (rows, hour 1 at the top) map, and the σ relative to it (NaN where dark).
+fn temporal(
+    result: &AnnualResult,
+    at: impl Fn(usize) -> (f64, f64),
+) -> (Vec<f64>, Vec<f64>, usize) {
     let days = result.matrix.records.div_ceil(24);
     let (mut mean, mut rel) = (vec![0.0; days * 24], vec![f64::NAN; days * 24]);
     for (t, hour) in result.matrix.hours.iter().enumerate() {
         let (day, row) = (hour.record / 24, hour.record % 24);
-        let (e, s) = h.receiver_mean(t);
+        let (e, s) = at(t);
         mean[row * days + day] = e;
         rel[row * days + day] = if e > 0.0 { s / e } else { f64::NAN };
     }
@@ -326,15 +329,39 @@ fn receiver_html(result: &AnnualResult, f: &ReceiverFigures, h: &Hourly) -> Resu
         html += &format!("<tr><th>{}</th><td>{}</td></tr>\n", escape(k), escape(v));
     }
     html += "</table>\n";
-    let (mean, rel, days) = temporal(result, h);
-    // The top of the scale at the 99th percentile of the lit hours: a few sunny hours
-    // would leave the rest of the year dark.
-    let p99 = crate::raster::quantile(&mean, 0.99, crate::raster::Rank::Nearest, |x| x > 0.0);
-    let top = nice_max(&[p99]);
-    let images = [
-        ("Receiver mean illuminance, day of the year (across) by hour (down); the scale tops at the lit hours' 99th percentile", map_png(&mean, days, 24, [2, 8], top, &format!("{top} lx"))?),
-        ("Its relative σ (bound: the mean of the cells' σ)", map_png(&rel, days, 24, [2, 8], 0.2, "20 %")?),
-    ];
+    // The least-lit cell: where the annual figures are decided.
+    let darkest = (0..f.cells.len())
+        .min_by(|&a, &b| f.cells[a].mean_lx.total_cmp(&f.cells[b].mean_lx))
+        .unwrap_or(0);
+    let (i, j) = (darkest % f.shape[0] as usize, darkest / f.shape[0] as usize);
+    let of_cell = |t: usize| {
+        let k = t * h.cells + darkest;
+        (h.e[k] as f64, h.sigma[k] as f64)
+    };
+    let mut images = Vec::new();
+    for (what, (mean, rel, days)) in [
+        (
+            "Receiver mean illuminance".to_string(),
+            temporal(result, |t| h.receiver_mean(t)),
+        ),
+        (
+            format!("Illuminance of the least-lit cell ({i}, {j})"),
+            temporal(result, of_cell),
+        ),
+    ] {
+        // The top of the scale at the 99th percentile of the lit hours: a few sunny
+        // hours would leave the rest of the year dark.
+        let p99 = crate::raster::quantile(&mean, 0.99, crate::raster::Rank::Nearest, |x| x > 0.0);
+        let top = nice_max(&[p99]);
+        images.push((
+            format!("{what}, day of the year (across) by hour (down); the scale tops at the lit hours' 99th percentile"),
+            map_png(&mean, days, 24, [2, 8], top, &format!("{top} lx"))?,
+        ));
+        images.push((
+            "Its relative σ (for the mean, a bound: the mean of the cells' σ)".to_string(),
+            map_png(&rel, days, 24, [2, 8], 0.2, "20 %")?,
+        ));
+    }
     let cell = |g: &dyn Fn(&crate::annual::metrics::CellFigures) -> f64| {
         receiver_rows(&f.cells.iter().map(g).collect::<Vec<_>>(), f.shape)
     };
@@ -396,12 +423,13 @@ fn receiver_html(result: &AnnualResult, f: &ReceiverFigures, h: &Hourly) -> Resu
             map_png(&cell(&|c| c.ase_probability), nu, nv, [px, px], 1.0, "1")?,
         ),
     ];
-    for (title, png) in images.iter().chain(&maps) {
+    let maps = maps.into_iter().map(|(t, png)| (t.to_string(), png));
+    for (title, png) in images.into_iter().chain(maps) {
         html += &format!(
             "<figure><img src=\"{}\" alt=\"{}\"><figcaption>{}</figcaption></figure>\n",
-            png_uri(png),
-            escape(title),
-            escape(title)
+            png_uri(&png),
+            escape(&title),
+            escape(&title)
         );
     }
     Ok(html)

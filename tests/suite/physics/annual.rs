@@ -401,7 +401,8 @@ fn annual_files_hold_the_results() {
     assert_eq!(e0, result.hourly[0].e[0]);
     let html = std::fs::read_to_string(out.join("annual.html")).unwrap();
     assert!(html.contains("sDA300/50 %") && html.contains("EN 17037 high level"));
-    assert_eq!(html.matches("data:image/png;base64,").count(), 8);
+    assert_eq!(html.matches("data:image/png;base64,").count(), 10);
+    assert!(html.contains("Illuminance of the least-lit cell"));
 }
 
 /// Each hour's sky is normalised by its own integral, Σ over the patches of ∫L cos dω
