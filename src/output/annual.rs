@@ -144,9 +144,9 @@ fn lit_hours(result: &AnnualResult) -> Vec<Option<usize>> {
     out
 }
 
-/// Per record: its stamp, whether occupied, the hour's own sun position and the sky's
-/// direct normal, diffuse and global horizontal illuminance, the receiver's mean illuminance and an upper
-/// bound of its σ ([`Hourly::receiver_mean`]).
+/// Per record: its stamp, whether occupied, the hour's own sun position, the sky's
+/// direct normal, diffuse and global horizontal illuminance, and the receiver's mean
+/// illuminance with an upper bound of its σ ([`Hourly::receiver_mean`]).
 fn write_hours(path: &Path, result: &AnnualResult, h: &Hourly) -> Result<()> {
     let lit = lit_hours(result);
     write_atomic(path, |w| {

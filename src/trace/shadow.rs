@@ -160,20 +160,17 @@ impl<'a> ShadowCaster<'a> {
                     });
                     continue;
                 };
-                let dir = Vec3::new(r.dx[k], r.dy[k], r.dz[k]);
-                let along = dir.normalize().dot(surface.normal);
-                s.gain[i] *= glazing.reflect_transmit(along.abs() as f64).1;
-                let leave = if along > 0.0 {
-                    surface.normal
-                } else {
-                    -surface.normal
+                let past = Past {
+                    next: &mut s.next,
+                    next_index: &mut s.next_index,
                 };
-                let origin = offset_origin(surface.point, leave, self.scene_scale);
-                let rest = r.tfar[k] - s.hits.t[k];
-                if s.gain[i] > 0.0 && rest > 0.0 {
-                    s.next.push(origin.to_array(), dir.to_array(), 0.0, rest);
-                    s.next_index.push(i as u32);
-                }
+                self.cross_pane(
+                    glazing,
+                    &surface,
+                    (r, k, s.hits.t[k]),
+                    (&mut s.gain[i], i),
+                    past,
+                );
             }
             std::mem::swap(&mut s.rays, &mut s.next);
             std::mem::swap(&mut s.index, &mut s.next_index);
@@ -196,21 +193,51 @@ impl<'a> ShadowCaster<'a> {
                 through[i] = 0.0;
                 continue;
             };
-            let dir = Vec3::new(r.dx[k], r.dy[k], r.dz[k]);
-            let along = dir.normalize().dot(surface.normal);
-            through[i] *= glazing.reflect_transmit(along.abs() as f64).1;
-            let leave = if along > 0.0 {
-                surface.normal
-            } else {
-                -surface.normal
+            let past = Past {
+                next: &mut s.next,
+                next_index: &mut s.next_index,
             };
-            let origin = offset_origin(surface.point, leave, self.scene_scale);
-            let rest = r.tfar[k] - s.hits.t[k];
-            s.past_last_pane[i] = rest;
-            if through[i] > 0.0 && rest > 0.0 {
-                s.next.push(origin.to_array(), dir.to_array(), 0.0, rest);
-                s.next_index.push(i as u32);
-            }
+            s.past_last_pane[i] = self.cross_pane(
+                glazing,
+                &surface,
+                (r, k, s.hits.t[k]),
+                (&mut through[i], i),
+                past,
+            );
         }
     }
+
+    /// Ray `k` of `r`, which hit the pane `glazing` at `surface` at distance `t`: its
+    /// light `gain` times the pane's T(θ) at its incidence, and its continuation past
+    /// the pane (as ray `i`) while light and length are left. Returns the length left.
+    fn cross_pane(
+        &self,
+        glazing: &Glazing,
+        surface: &Surface,
+        (r, k, t): (&RayBatch, usize, f32),
+        (gain, i): (&mut f64, usize),
+        past: Past<'_>,
+    ) -> f32 {
+        let dir = Vec3::new(r.dx[k], r.dy[k], r.dz[k]);
+        let along = dir.normalize().dot(surface.normal);
+        *gain *= glazing.reflect_transmit(along.abs() as f64).1;
+        let leave = if along > 0.0 {
+            surface.normal
+        } else {
+            -surface.normal
+        };
+        let origin = offset_origin(surface.point, leave, self.scene_scale);
+        let rest = r.tfar[k] - t;
+        if *gain > 0.0 && rest > 0.0 {
+            past.next.push(origin.to_array(), dir.to_array(), 0.0, rest);
+            past.next_index.push(i as u32);
+        }
+        rest
+    }
+}
+
+/// Where [`ShadowCaster::cross_pane`] puts the rays that go on past a pane.
+struct Past<'a> {
+    next: &'a mut RayBatch,
+    next_index: &'a mut Vec<u32>,
 }
