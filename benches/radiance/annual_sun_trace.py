@@ -163,6 +163,19 @@ def almanac_sun(year, month, day, hour_lst, lat, lon_east, tz_h):
     return (x, yv, z)
 
 
+def radiance_sun(jd, hr, lat, lon_east, tz_h):
+    """Radiance's sun.c as gendaymtx calls it (sdec, stadj, salt, sazi from the day of
+    the year; 6.0a's sdec has 365, not 368): (x east, y north, z up)."""
+    s_lat, s_lon, s_mer = math.radians(lat), math.radians(-lon_east), math.radians(-15.0 * tz_h)
+    sd = 0.4093 * math.sin((2 * math.pi / 365) * (jd - 81))
+    st = hr + 0.170 * math.sin((4 * math.pi / 373) * (jd - 80)) - 0.129 * math.sin((2 * math.pi / 355) * (jd - 8)) \
+        + 12 * (s_mer - s_lon) / math.pi
+    alt = math.asin(math.sin(s_lat) * math.sin(sd) - math.cos(s_lat) * math.cos(sd) * math.cos(st * math.pi / 12))
+    azi = -math.atan2(math.cos(sd) * math.sin(st * math.pi / 12),
+                      -math.cos(s_lat) * math.sin(sd) - math.sin(s_lat) * math.cos(sd) * math.cos(st * math.pi / 12)) + math.pi
+    return (math.cos(alt) * math.sin(azi), math.cos(alt) * math.cos(azi), math.sin(alt))
+
+
 def epw_location(path):
     with open(path) as f:
         p = f.readline().split(",")
@@ -210,6 +223,8 @@ def main():
     hours = annual.read_csv(lux_out / f"annual_{a.receiver}_hours.csv")
     lat, lon, tz = epw_location(epw)
     minutes = sorted({sid % 60 for sid in suns})
+    replica_sun_max_deg = max(angle_deg(radiance_sun(sid // 1440 + 1, (sid % 1440) / 60, lat, lon, tz), v)
+                              for sid, (v, _) in suns.items())
     assert len(hours) == len(recs)
 
     rows = []
@@ -333,7 +348,7 @@ def main():
         by_month=by_month, by_altitude_deg=by_alt, chain=chain, replica_checks=chk,
         angle_deg=dict(n=len(ang), mean=sum(ang) / len(ang), median=pct(ang, 0.5), p90=pct(ang, 0.9), p99=pct(ang, 0.99),
                        max=max(ang), weighted_by_lux_edn_sinh=sum(x * w for x, w in ang_w) / wsum),
-        sun_minutes_past_the_hour=minutes,
+        sun_minutes_past_the_hour=minutes, replica_sun_c_max_angle_deg=replica_sun_max_deg,
         almanac_angle_deg=dict(to_luxtally_mean=sum(r["angle_alm_lux"] for r in rows if "angle" in r) / len(ang),
                                to_luxtally_max=max(r["angle_alm_lux"] for r in rows if "angle" in r),
                                to_gendaymtx_mean=sum(r["angle_alm_rad"] for r in rows if "angle" in r) / len(ang),
@@ -392,7 +407,9 @@ def markdown(r):
                f"refraction): to luxtally's mean {al['to_luxtally_mean']:.3f}°, max {al['to_luxtally_max']:.3f}°; to "
                f"gendaymtx's mean {al['to_gendaymtx_mean']:.3f}°, max {al['to_gendaymtx_max']:.3f}°. gendaymtx's suns "
                f"sit at {r['sun_minutes_past_the_hour']} min past the hour (its loadEPW: stamp − 0.5 h, as luxtally's "
-               f"mid-hour).")
+               f"mid-hour). Radiance's sun.c (sdec = 0.4093 sin(2π(jd − 81)/365), stadj's two-term equation of "
+               f"time, from the day of the year), re-computed here, gives gendaymtx's suns within "
+               f"{r['replica_sun_c_max_angle_deg']:.5f}°.")
     e = r["edn_ratio_per_record"]
     out.append(f"E_dn luxtally / gendaymtx per record (E_dn > 100 lx in gendaymtx, {e['n']}): median {e['median']:.4f}, "
                f"5–95 % {e['p5']:.4f}–{e['p95']:.4f}, min {e['min']:.4f}, max {e['max']:.4f}.\n")
