@@ -140,6 +140,21 @@ pub fn uniform_cone(rng: &mut Pcg32, n: DVec3, cos_max: f64) -> DVec3 {
     uniform_cone_band(rng, n, cos_max, 1.0)
 }
 
+/// A direction uniform in solid angle within band `band` of `bands` equal bands of
+/// cos θ of the cone of half-angle cos⁻¹ `cos_half` about `n` (band 0 nearest the axis):
+/// stratified cone sampling, as luminance meters' connections and samples draw it.
+pub fn cone_band_direction(
+    rng: &mut Pcg32,
+    n: DVec3,
+    cos_half: f64,
+    band: f64,
+    bands: f64,
+) -> DVec3 {
+    let cos_lo = 1.0 - (1.0 - cos_half) * (band + 1.0) / bands;
+    let cos_hi = 1.0 - (1.0 - cos_half) * band / bands;
+    uniform_cone_band(rng, n, cos_lo, cos_hi)
+}
+
 /// A direction about `n` (unit), uniform over the solid angle of the band
 /// cos_lo ≤ cos θ ≤ cos_hi.
 #[inline]

@@ -10,8 +10,9 @@ use crate::accel::{HitBatch, RayBatch, RayCaster};
 use crate::rng;
 use crate::sampling::uniform;
 use crate::scene::{Camera, Scene};
-use crate::surface::{Bsdf, Incidence, LobeKind, Transport};
+use crate::surface::{Bsdf, Incidence, LobeKind};
 use crate::trace::emit::Emitters;
+use crate::trace::reflected::reflected_direct;
 use crate::trace::scatter::offset_origin;
 use crate::trace::shadow::{ShadowCaster, ShadowScratch};
 use glam::{DVec3, Vec3};
@@ -356,36 +357,8 @@ impl<'a> EyePass<'a> {
     /// the eye's side or τ/π·E from the other side for a Lambertian one; `wo` towards
     /// the eye).
     fn queue_direct(&self, at: &Vertex, s: &mut Scratch) {
-        let (p, normal, facing, wo, bsdf) = (at.p, at.inc.n, at.inc.facing, -at.inc.dir, at.bsdf);
         let (weight, sample, stream) = (at.path.weight, at.path.sample, at.stream);
-        let pd = p.as_dvec3();
-        // Luminance per lux arriving from direction `to_light` (unit).
-        let gain = |to_light: DVec3| -> (f64, DVec3) {
-            let cos = to_light.dot(facing);
-            let side = if cos >= 0.0 { facing } else { -facing };
-            let g = bsdf.f_cos(
-                weight,
-                wo,
-                to_light,
-                normal,
-                cos,
-                Transport::Radiance,
-                false,
-            );
-            (g, side)
-        };
-        let push = |s: &mut Scratch, leave: DVec3, to: DVec3, tfar: f32, l: f64| {
-            if l <= 0.0 {
-                return;
-            }
-            let origin = offset_origin(p, leave.as_vec3(), self.scene_scale);
-            s.shadow
-                .push(origin.to_array(), to.as_vec3().to_array(), 0.0, tfar);
-            s.shadow_gain.push((sample, l));
-        };
-        // Shadow rays towards a point stop just short of it: a source sitting on a
-        // surface is not shadowed by that surface.
-        const SHORT: f32 = 1.0 - 1e-5;
+        let pd = at.p.as_dvec3();
         let mut area_pattern = Vec::new();
         for light in 0..self.lights.emitters.len() {
             // n × n jittered strata over sources with an extent (area sources,
@@ -410,15 +383,21 @@ impl<'a> EyePass<'a> {
             } else {
                 area_pattern.push((0.5, 0.5));
             }
-            self.lights.incoming(light, pd, &area_pattern, |inc| {
-                let (g, leave) = gain(inc.direction());
-                let t_far = if inc.distance.is_finite() {
-                    SHORT
-                } else {
-                    f32::INFINITY
-                };
-                push(s, leave, inc.to_source, t_far, g * inc.normal_lx);
-            });
+            let surface = (at.p, &at.inc, at.bsdf);
+            let scale = self.scene_scale;
+            reflected_direct(
+                &self.lights,
+                light,
+                surface,
+                weight,
+                &area_pattern,
+                false,
+                scale,
+                |o, to, t_far, l| {
+                    s.shadow.push(o.to_array(), to.to_array(), 0.0, t_far);
+                    s.shadow_gain.push((sample, l));
+                },
+            );
         }
     }
 

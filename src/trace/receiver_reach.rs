@@ -3,7 +3,7 @@
 //! a sampled direction of a luminance meter's cone). The receiver's geometry and cells
 //! are `tally::ReceiverGrid`'s.
 
-use crate::sampling::{uniform, uniform_cone_band};
+use crate::sampling::{cone_band_direction, uniform};
 use crate::tally::receiver_grid::Kind;
 use crate::tally::ReceiverGrid;
 use glam::DVec3;
@@ -154,9 +154,8 @@ impl ReceiverGrid {
                 ..
             } => {
                 // Stratum s of the cone is the band of cos θ it covers.
-                let cos_lo = 1.0 - (1.0 - cos_half_angle) * (stratum as f64 + 1.0) / strata;
-                let cos_hi = 1.0 - (1.0 - cos_half_angle) * stratum as f64 / strata;
-                let dir = uniform_cone_band(rng, towards_meter, cos_lo, cos_hi);
+                let dir =
+                    cone_band_direction(rng, towards_meter, cos_half_angle, stratum as f64, strata);
                 let cos_n = dir.dot(self.normal);
                 let distance = (self.corner - x).dot(self.normal) / cos_n;
                 if !(distance > 0.0) {

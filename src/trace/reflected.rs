@@ -14,16 +14,17 @@
 //! connect, and light that came by another surface.
 
 use super::direct::DirectLight;
+use super::emit::Emitters;
 use super::scatter::offset_origin;
 use super::shadow::SeenThrough;
 use crate::accel::RayBatch;
 use crate::rng::direct_stream;
-use crate::sampling::{uniform, uniform_cone_band};
+use crate::sampling::{cone_band_direction, uniform};
 use crate::scene::Scene;
 use crate::surface::{Bsdf, Incidence, Transport};
 use crate::tally::receiver_grid::Kind;
 use crate::tally::ReceiverGrid;
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 
 /// Per material, the BSDF a meter's samples reflect the sources' light through.
 pub struct Reflectors {
@@ -38,6 +39,46 @@ impl Reflectors {
             scene_scale: scene.geometry.local_scale(),
         }
     }
+}
+
+/// The next event of a surface point seen along `at.dir`: for each piece of source
+/// `light` (`pattern` of an area source) reaching `x`, the luminance w·f(wo, ωᵢ)·|cos θᵢ|·E⊥
+/// its lobes send back towards where the ray came from (the finite lobes, or the
+/// connectable ones only), handed to `push` with the shadow ray that must be clear for
+/// it (origin offset off the side it leaves, direction to the source, t_far short of a
+/// source point). The eye pass's direct term and the meters' reflected light both.
+#[allow(clippy::too_many_arguments)]
+pub fn reflected_direct(
+    emitters: &Emitters,
+    light: usize,
+    (x, at, bsdf): (Vec3, &Incidence, &Bsdf),
+    w: f64,
+    pattern: &[(f64, f64)],
+    connectable_only: bool,
+    scene_scale: f32,
+    mut push: impl FnMut(Vec3, Vec3, f32, f64),
+) {
+    // Shadow rays towards a point stop just short of it: a source sitting on a
+    // surface is not shadowed by that surface.
+    const SHORT: f32 = 1.0 - 1e-5;
+    let wo = -at.dir;
+    emitters.incoming(light, x.as_dvec3(), pattern, |inc| {
+        let wi = inc.direction();
+        let cos = wi.dot(at.facing);
+        let side = if cos >= 0.0 { at.facing } else { -at.facing };
+        let g = bsdf.f_cos(w, wo, wi, at.n, cos, Transport::Radiance, connectable_only);
+        let l = g * inc.normal_lx;
+        if !(l > 0.0) {
+            return;
+        }
+        let t_far = if inc.distance.is_finite() {
+            SHORT
+        } else {
+            f32::INFINITY
+        };
+        let origin = offset_origin(x, side.as_vec3(), scene_scale);
+        push(origin, inc.to_source.as_vec3(), t_far, l);
+    });
 }
 
 /// Reused buffers of one worker.
@@ -103,9 +144,13 @@ impl DirectLight<'_> {
                 );
                 // The band of cos θ of stratum π(sample), uniform within it.
                 let band = s.permutation[sample as usize] as f64;
-                let cos_hi = 1.0 - (1.0 - cos_half_angle) * band / samples as f64;
-                let cos_lo = 1.0 - (1.0 - cos_half_angle) * (band + 1.0) / samples as f64;
-                let w = uniform_cone_band(&mut rng, towards_meter, cos_lo, cos_hi);
+                let w = cone_band_direction(
+                    &mut rng,
+                    towards_meter,
+                    cos_half_angle,
+                    band,
+                    samples as f64,
+                );
                 for _ in 0..lights {
                     s.source_points.push((uniform(&mut rng), uniform(&mut rng)));
                 }
@@ -132,32 +177,25 @@ impl DirectLight<'_> {
                 continue;
             }
             let (r, weight, w) = s.view_meta[k];
-            let x = seen.surface.point;
             let at = Incidence::new(-w, seen.surface.normal.as_dvec3());
             let points = &s.source_points[k * lights..(k + 1) * lights];
-            for (light, &point) in points.iter().enumerate() {
-                self.emitters
-                    .incoming(light, x.as_dvec3(), &[point], |inc| {
-                        let wi = inc.direction();
-                        let cos = wi.dot(at.facing);
-                        let g = bsdf.f_cos(1.0, w, wi, at.n, cos, Transport::Radiance, true);
-                        let l = g * inc.normal_lx * seen.through * weight;
-                        if !(l > 0.0) {
-                            return;
-                        }
-                        let leave = if cos >= 0.0 { at.facing } else { -at.facing };
-                        let origin = offset_origin(x, leave.as_vec3(), reflectors.scene_scale);
-                        // Stop just short of a source point: a source on a surface is not
-                        // shadowed by it.
-                        let t_far = if inc.distance.is_finite() {
-                            1.0 - 1e-5
-                        } else {
-                            f32::INFINITY
-                        };
-                        let to = inc.to_source.as_vec3();
-                        s.shadow.push(origin.to_array(), to.to_array(), 0.0, t_far);
-                        s.gain.push((r, l));
-                    });
+            for (light, point) in points.iter().enumerate() {
+                let surface = (seen.surface.point, &at, bsdf);
+                let scale = reflectors.scene_scale;
+                let pattern = std::slice::from_ref(point);
+                reflected_direct(
+                    self.emitters,
+                    light,
+                    surface,
+                    1.0,
+                    pattern,
+                    true,
+                    scale,
+                    |o, to, t_far, l| {
+                        s.shadow.push(o.to_array(), to.to_array(), 0.0, t_far);
+                        s.gain.push((r, l * seen.through * weight));
+                    },
+                );
             }
         }
         rays += self.shadows.transmitted(&s.shadow, &mut s.through, shadow);
