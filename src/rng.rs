@@ -99,10 +99,184 @@ pub fn direct_stream(seed: u64, cell: u64, replicate: u64) -> Pcg32 {
     )
 }
 
+/// Photons per block of a randomised quasi-Monte Carlo (QMC) run, 2^12: each block of
+/// photon indices (`i >> QMC_LOG2_BLOCK`) is scrambled on its own, so blocks are
+/// independent replicates and the statistics take each block as one history.
+pub const QMC_LOG2_BLOCK: u32 = 12;
+
+/// What a QMC draw of a photon takes: two dimensions of its joint Sobol' point (the
+/// emission's direction, dimensions 0 and 1, and its first vertex's connection points,
+/// 2 and 3, stratified together), or a pair of its own (every later draw, identified by
+/// `pair`: padded, as pbrt-v4's PaddedSobolSampler pads dimensions).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum QmcDraw {
+    Emission,
+    FirstConnection,
+    Padded(u64),
+}
+
+/// Photon `photon`'s point of `draw` in a run seeded with `seed`, in [0, 1)²: the
+/// photon's point of its block's 2^[`QMC_LOG2_BLOCK`]-point Sobol' net, its index
+/// shuffled and each dimension Owen-scrambled by hashes of (seed, block, pair) (Burley
+/// 2020, "Practical Hash-based Owen Scrambling"). Every point is uniform on [0, 1)²
+/// (so each estimate stays unbiased), and a block's points of a pair are a
+/// (0, 12, 2)-net (the emission's and the padded pairs; the first connection's, Sobol's
+/// dimensions 2 and 3, a (2, 12, 2)-net): a block stratifies what they pick.
+#[inline]
+pub fn qmc_square(seed: u64, photon: u64, draw: QmcDraw) -> (f64, f64) {
+    let (pair, first_dimension) = match draw {
+        QmcDraw::Emission => (u64::MAX, 0),
+        QmcDraw::FirstConnection => (u64::MAX, 2),
+        QmcDraw::Padded(pair) => (pair, 0),
+    };
+    let scramble = mix64(mix64(seed ^ 0x1f83_d9ab_fb41_bd6b) ^ (photon >> QMC_LOG2_BLOCK));
+    let scramble = mix64(scramble ^ pair.wrapping_mul(GOLDEN_GAMMA));
+    let mask = (1u32 << QMC_LOG2_BLOCK) - 1;
+    let index = nested_uniform_scramble(photon as u32 & mask, scramble as u32) & mask;
+    let coordinate = |d: usize| {
+        let x = sobol(index, d);
+        let x = nested_uniform_scramble(x, mix64(scramble ^ (d as u64 + 1)) as u32);
+        x as f64 * (1.0 / 4_294_967_296.0)
+    };
+    (coordinate(first_dimension), coordinate(first_dimension + 1))
+}
+
+/// Sobol's first four dimensions' direction numbers (Joe & Kuo's: the van der Corput
+/// sequence, then the primitive polynomials x + 1, x² + x + 1 and x³ + x + 1 with
+/// m = (1), (1, 3), (1, 3, 1)).
+const SOBOL_DIRECTIONS: [[u32; 32]; 4] = [
+    sobol_directions(0, 0, &[]),
+    sobol_directions(1, 0, &[1]),
+    sobol_directions(2, 1, &[1, 3]),
+    sobol_directions(3, 1, &[1, 3, 1]),
+];
+
+/// Direction numbers of a dimension of degree `s` polynomial coefficients `a` and initial
+/// numbers `m` (Joe & Kuo's recurrence; degree 0: the van der Corput sequence).
+const fn sobol_directions(s: usize, a: u32, m: &[u32]) -> [u32; 32] {
+    let mut v = [0u32; 32];
+    let mut i = 0;
+    while i < 32 {
+        v[i] = if s == 0 {
+            1 << (31 - i)
+        } else if i < s {
+            m[i] << (31 - i)
+        } else {
+            let mut x = v[i - s] ^ (v[i - s] >> s);
+            let mut k = 1;
+            while k < s {
+                x ^= ((a >> (s - 1 - k)) & 1) * v[i - k];
+                k += 1;
+            }
+            x
+        };
+        i += 1;
+    }
+    v
+}
+
+/// Coordinate `dimension` (0–3) of point `index` of the Sobol' sequence, as 32 bits.
+#[inline]
+fn sobol(mut index: u32, dimension: usize) -> u32 {
+    let directions = &SOBOL_DIRECTIONS[dimension];
+    let mut x = 0;
+    while index != 0 {
+        x ^= directions[index.trailing_zeros() as usize];
+        index &= index - 1;
+    }
+    x
+}
+
+/// Owen's nested uniform scramble of the binary fraction `x`: each bit flips by a hash of
+/// the bits above it (Vegdahl's hash in Laine–Karras form, on the reversed bits, where
+/// each bit depends on the bits below it only).
+#[inline]
+fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
+    let mut y = x.reverse_bits();
+    y ^= y.wrapping_mul(0x3d20_adea);
+    y = y.wrapping_add(seed);
+    y = y.wrapping_mul((seed >> 16) | 1);
+    y ^= y.wrapping_mul(0x0552_6c56);
+    y ^= y.wrapping_mul(0x53a2_2864);
+    y.reverse_bits()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use rand::RngCore;
+
+    /// Points of `draw` of photons `first .. first + 4096` (one block), on a 2^12 grid.
+    fn block_points(seed: u64, first: u64, draw: QmcDraw) -> Vec<(u32, u32)> {
+        (first..first + 4096)
+            .map(|i| {
+                let (u, v) = qmc_square(seed, i, draw);
+                assert!((0.0..1.0).contains(&u) && (0.0..1.0).contains(&v));
+                ((u * 4096.0) as u32, (v * 4096.0) as u32)
+            })
+            .collect()
+    }
+
+    /// Whether every box of 2^a × 2^(12−t−a) cells, for every a, holds exactly 2^t
+    /// points: a (t, 12, 2)-net.
+    fn is_a_net(points: &[(u32, u32)], t: u32) -> bool {
+        let m = 12 - t;
+        (0..=m).all(|a| {
+            let mut count = vec![0u32; 1 << m];
+            for &(u, v) in points {
+                count[(((u >> (12 - a)) << (m - a)) | (v >> (12 - m + a))) as usize] += 1;
+            }
+            count.iter().all(|&c| c == 1 << t)
+        })
+    }
+
+    #[test]
+    fn a_qmc_block_is_a_net_and_blocks_are_scrambled_apart() {
+        // Sobol's dimensions 2 and 3 together are a (2, 12, 2)-net, each alone a
+        // (0, 12, 1)-net (the boxes of one row or one column).
+        let draws = [
+            (QmcDraw::Emission, 0),
+            (QmcDraw::Padded(7), 0),
+            (QmcDraw::FirstConnection, 2),
+        ];
+        for (draw, t) in draws {
+            let block = block_points(3, 8192, draw);
+            assert!(is_a_net(&block, t), "{draw:?}");
+            assert!(t == 0 || !is_a_net(&block, t - 1), "{draw:?}");
+            let mut rows: Vec<u32> = block.iter().map(|p| p.0).collect();
+            rows.sort_unstable();
+            assert!(
+                rows.iter().enumerate().all(|(k, &r)| r == k as u32),
+                "{draw:?}"
+            );
+            // Another block, seed or pair: another scramble of the net.
+            assert_ne!(block, block_points(3, 12288, draw), "{draw:?}");
+            assert_ne!(block, block_points(4, 8192, draw), "{draw:?}");
+        }
+        assert_ne!(
+            block_points(3, 0, QmcDraw::Padded(1)),
+            block_points(3, 0, QmcDraw::Padded(2))
+        );
+    }
+
+    #[test]
+    fn a_photons_qmc_point_is_uniform_over_blocks() {
+        // One photon slot of 16,384 blocks: 16 × 16 bins, each expected 64 times; a
+        // χ² of 255 dof above 340 has probability below 3·10⁻⁴.
+        for draw in [
+            QmcDraw::Emission,
+            QmcDraw::FirstConnection,
+            QmcDraw::Padded(3),
+        ] {
+            let mut bins = [0u32; 256];
+            for block in 0..16_384u64 {
+                let (u, v) = qmc_square(11, (block << QMC_LOG2_BLOCK) + 77, draw);
+                bins[(u * 16.0) as usize * 16 + (v * 16.0) as usize] += 1;
+            }
+            let chi2: f64 = bins.iter().map(|&b| (b as f64 - 64.0).powi(2) / 64.0).sum();
+            assert!(chi2 < 340.0, "{draw:?}: χ² = {chi2}");
+        }
+    }
 
     #[test]
     fn a_photons_stream_depends_on_the_seed_and_its_index_alone() {

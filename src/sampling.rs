@@ -159,8 +159,15 @@ pub fn cone_band_direction(
 /// cos_lo ≤ cos θ ≤ cos_hi.
 #[inline]
 pub fn uniform_cone_band(rng: &mut Pcg32, n: DVec3, cos_lo: f64, cos_hi: f64) -> DVec3 {
-    let cos_t = cos_hi - uniform(rng) * (cos_hi - cos_lo);
-    around(n, cos_t, std::f64::consts::TAU * uniform(rng))
+    let (u, v) = (uniform(rng), uniform(rng));
+    cone_from_square(n, cos_lo, cos_hi, (u, v))
+}
+
+/// [`uniform_cone_band`]'s direction from the point (u, v) of [0, 1)²: u picks cos θ, v
+/// the azimuth.
+#[inline]
+pub fn cone_from_square(n: DVec3, cos_lo: f64, cos_hi: f64, (u, v): (f64, f64)) -> DVec3 {
+    around(n, cos_hi - u * (cos_hi - cos_lo), std::f64::consts::TAU * v)
 }
 
 /// A cosine-weighted (Lambertian) direction in the hemisphere about `n` (unit): a

@@ -22,7 +22,8 @@ const MAGIC: &[u8; 8] = b"LUXCKPT1";
 /// (`tally::Moments`), not power sums. 4: the scene fingerprint is
 /// `scene::fingerprint::run`. 5: the cells gain one total slot per receiver
 /// (its figures' covariance). 6: a history point carries its checks' counts (`CheckCounts`).
-pub const FORMAT_VERSION: u32 = 6;
+/// 7: the numbers and tallies say whether histories are QMC blocks.
+pub const FORMAT_VERSION: u32 = 7;
 const HEADER_BYTES: usize = 8 + 4 + 8 + 4;
 
 /// A history point as saved: [`HistoryPoint`]'s fields in order (postcard cannot skip
@@ -71,6 +72,7 @@ pub(super) struct SavedTallies<'a> {
     pub(super) direct_rays: u64,
     pub(super) dark: bool,
     pub(super) score_unit: f64,
+    pub(super) photons_per_history: u64,
 }
 
 impl<'a> SavedTallies<'a> {
@@ -92,6 +94,7 @@ impl<'a> SavedTallies<'a> {
             direct_rays: t.direct_rays,
             dark: t.dark,
             score_unit: t.score_unit,
+            photons_per_history: t.photons_per_history,
         }
     }
 
@@ -108,6 +111,7 @@ impl<'a> SavedTallies<'a> {
             direct_rays: self.direct_rays,
             dark: self.dark,
             score_unit: self.score_unit,
+            photons_per_history: self.photons_per_history,
         })
     }
 }
@@ -331,9 +335,9 @@ mod tests {
     use super::*;
     use crate::checkpoint::Numbers;
 
-    /// Length and CRC-32 of the fixed checkpoint below, encoded by format 6.
-    const GOLDEN_LEN: usize = 161;
-    const GOLDEN_CRC: u32 = 1_275_775_374;
+    /// Length and CRC-32 of the fixed checkpoint below, encoded by format 7.
+    const GOLDEN_LEN: usize = 163;
+    const GOLDEN_CRC: u32 = 3_389_627_411;
 
     #[test]
     fn a_damaged_checkpoint_is_refused_in_one_line() {
@@ -350,6 +354,7 @@ mod tests {
                 seed: 1,
                 estimator: None,
                 backend: "embree".into(),
+                qmc: false,
             },
             photons_goal: Some(10),
             shard: None,
@@ -366,7 +371,7 @@ mod tests {
         };
         let bytes = c.encode().unwrap();
         assert_eq!(Checkpoint::decode(&bytes, "c").unwrap(), c);
-        // Format 6's encoding of this checkpoint: a change here needs FORMAT_VERSION bumped.
+        // Format 7's encoding of this checkpoint: a change here needs FORMAT_VERSION bumped.
         assert_eq!(
             (bytes.len(), crc32fast::hash(&bytes)),
             (GOLDEN_LEN, GOLDEN_CRC),

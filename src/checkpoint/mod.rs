@@ -52,6 +52,8 @@ pub struct Numbers {
     pub estimator: Option<String>,
     /// The backend casts the rays: another one gives other bits.
     pub backend: String,
+    /// QMC connection points, and blocks for histories (`RunOptions::qmc`).
+    pub qmc: bool,
 }
 
 impl Numbers {
@@ -60,6 +62,7 @@ impl Numbers {
             seed: options.seed,
             estimator: options.estimator.map(|e| format!("{e:?}")),
             backend: options.backend.name().to_string(),
+            qmc: options.qmc,
         }
     }
 
@@ -77,6 +80,14 @@ impl Numbers {
                 "--estimator differs (checkpoint {}, now {})",
                 show(&self.estimator),
                 show(&now.estimator)
+            ));
+        }
+        if self.qmc != now.qmc {
+            let show = |on: bool| if on { "on" } else { "off" };
+            return Some(format!(
+                "QMC differs (checkpoint {}, now {})",
+                show(self.qmc),
+                show(now.qmc)
             ));
         }
         if self.backend != now.backend {

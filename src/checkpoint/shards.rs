@@ -35,6 +35,7 @@ pub fn merged_options(scene: &Scene, first: &Checkpoint, path: &Path) -> Result<
     options.seed = first.numbers.seed;
     options.stop.photons = first.photons_goal;
     options.backend = first.numbers.backend.parse()?;
+    options.qmc = first.numbers.qmc;
     options.estimator = match first.numbers.estimator.as_deref() {
         None => None,
         Some(name) => Some(saved_estimator(name).ok_or_else(|| {

@@ -250,6 +250,13 @@ impl Emitter for LuminaireEmitter {
         (p, self.frame * self.photometry.sample_direction(rng))
     }
 
+    /// `direction` picks the photometric grid's cell (its alias table's two numbers).
+    fn sample_emission_from(&self, direction: (f64, f64), rng: &mut Pcg32) -> (DVec3, DVec3) {
+        let p = self.position + self.frame * self.photometry.opening.sample_point_m(rng);
+        let w = self.photometry.sample_direction_from(direction, rng);
+        (p, self.frame * w)
+    }
+
     /// Every point of the opening emits the file's distribution, I/A per unit area (as
     /// the photons leave it): one equal share of the opening per piece.
     fn incoming(&self, p: DVec3, area_pattern: &[(f64, f64)], each: &mut dyn FnMut(Incoming)) {

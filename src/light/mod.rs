@@ -155,6 +155,14 @@ pub trait Emitter: Debug + Send + Sync {
         emission_lanes_one_by_one(streams, rngs, o, d, |_, rng| self.sample_emission(rng));
     }
 
+    /// [`Emitter::sample_emission`] with the two numbers of [0, 1)² that pick the
+    /// direction given (a QMC run's, [`crate::rng::QmcDraw::Emission`]; each uniform,
+    /// so the density is the same). Sources whose direction is not a map of two
+    /// numbers draw it as `sample_emission` does.
+    fn sample_emission_from(&self, _direction: (f64, f64), rng: &mut Pcg32) -> (DVec3, DVec3) {
+        self.sample_emission(rng)
+    }
+
     /// The light arriving at local point `p` (method.md eqs. 1–2), piece by piece: one
     /// piece for a point-like or directional source; for a source with an extent one per
     /// point of `area_pattern` ([0, 1)² coordinates), each an equal share of the source.

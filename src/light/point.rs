@@ -81,6 +81,13 @@ impl Emitter for PointEmitter {
         (self.position, uniform_sphere(rng))
     }
 
+    fn sample_emission_from(&self, (u, v): (f64, f64), _: &mut Pcg32) -> (DVec3, DVec3) {
+        // As the lanes map theirs, in f32 (rounding below 1: the square is half-open).
+        const BELOW_ONE: f32 = 1.0 - f32::EPSILON / 2.0;
+        let w = sphere_from_square((u as f32).min(BELOW_ONE), (v as f32).min(BELOW_ONE));
+        (self.position, w.as_dvec3())
+    }
+
     /// Uniform directions in f32 lanes: each photon's stream seeded and its two draws
     /// taken in one loop, then the branch-free concentric map and lift
     /// ([`sphere_from_square`]) in one that vectorises.

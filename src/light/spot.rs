@@ -6,7 +6,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::input::{amount, direction, required, vec3, Coords};
-use crate::sampling::{uniform, uniform_cone};
+use crate::sampling::{cone_from_square, uniform, uniform_cone};
 use glam::DVec3;
 use rand_pcg::Pcg32;
 use serde::Deserialize;
@@ -136,6 +136,17 @@ impl Emitter for SpotEmitter {
                 break (self.position, dir);
             }
         }
+    }
+
+    /// The first proposal from `direction`, later ones (after a rejection) from `rng`:
+    /// each proposal is uniform in the cone and independent of the test, so the
+    /// density is `sample_emission`'s.
+    fn sample_emission_from(&self, direction: (f64, f64), rng: &mut Pcg32) -> (DVec3, DVec3) {
+        let dir = cone_from_square(self.axis, self.cos_cone, 1.0, direction);
+        if uniform(rng) < spot_profile(dir.dot(self.axis), self.cos_cone, self.cos_falloff) {
+            return (self.position, dir);
+        }
+        self.sample_emission(rng)
     }
 
     fn incoming(&self, p: DVec3, _: &[(f64, f64)], each: &mut dyn FnMut(Incoming)) {

@@ -394,7 +394,14 @@ impl Photometry {
     /// I(direction)/Φ: the interpolant reproduced exactly.
     #[inline]
     pub fn sample_direction(&self, rng: &mut Pcg32) -> DVec3 {
-        self.sampler.sample_direction(&self.grid, rng)
+        let cell = (uniform(rng), uniform(rng));
+        self.sampler.sample_direction(&self.grid, cell, rng)
+    }
+
+    /// [`Photometry::sample_direction`] with the two numbers that pick the grid cell
+    /// given (a QMC run's).
+    pub fn sample_direction_from(&self, cell: (f64, f64), rng: &mut Pcg32) -> DVec3 {
+        self.sampler.sample_direction(&self.grid, cell, rng)
     }
 
     /// [`Photometry::sample_direction`] as (C, γ) in degrees.

@@ -121,7 +121,15 @@ impl Sampler {
     /// A direction's (φ, θ) in radians, with cos θ and sin θ, distributed as I/Φ.
     #[inline]
     pub fn sample_rad(&self, rng: &mut Pcg32) -> (f64, f64, f64, f64) {
-        let c = &self.cells[self.alias.sample(uniform(rng), uniform(rng))];
+        let cell = (uniform(rng), uniform(rng));
+        self.sample_rad_in(cell, rng)
+    }
+
+    /// [`Sampler::sample_rad`] with the alias table's two numbers given: `cell` picks
+    /// the grid cell, `rng` the direction within it.
+    #[inline]
+    fn sample_rad_in(&self, cell: (f64, f64), rng: &mut Pcg32) -> (f64, f64, f64, f64) {
+        let c = &self.cells[self.alias.sample(cell.0, cell.1)];
         loop {
             let t = uniform(rng);
             let cos_theta = c.cos0 - uniform(rng) * (c.cos0 - c.cos1);
@@ -140,8 +148,8 @@ impl Sampler {
 
     /// A unit direction of the luminaire frame, distributed as I/Φ.
     #[inline]
-    pub fn sample_direction(&self, grid: &Grid, rng: &mut Pcg32) -> DVec3 {
-        let (phi, _, cos_theta, sin_theta) = self.sample_rad(rng);
+    pub fn sample_direction(&self, grid: &Grid, cell: (f64, f64), rng: &mut Pcg32) -> DVec3 {
+        let (phi, _, cos_theta, sin_theta) = self.sample_rad_in(cell, rng);
         let (sp, cp) = libm::sincos(phi);
         let a = &grid.axes;
         (cos_theta * a.pole + sin_theta * (cp * a.zero + sp * a.ninety)).normalize()

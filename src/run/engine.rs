@@ -62,7 +62,8 @@ impl<'s> Engine<'s> {
                 ));
             }
         }
-        let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
+        let tracer =
+            Tracer::new(scene, caster, options.seed, options.estimator).with_qmc(options.qmc);
         let flux = tracer.emitters.total_flux_lm;
         if !flux.is_finite() {
             return Err(Error::input(
@@ -125,8 +126,12 @@ impl<'s> Engine<'s> {
         if is_schedule_point(tallies.photons) {
             let wanted = schedule.wanted(tallies.photons, tallies.direct_replicates);
             seconds += self.add_direct(tallies, wanted);
-            let floor;
-            (*schedule, floor) = self.schedule_direct(tallies);
+            let (revised, floor) = self.schedule_direct(tallies);
+            // A QMC run's photon variance is unknown over its first blocks: the schedule
+            // waits for it.
+            if tallies.counts().photon_variance_known() {
+                *schedule = revised;
+            }
             seconds += self.add_direct(tallies, floor);
         }
         let wanted = schedule.wanted(tallies.photons, tallies.direct_replicates);
@@ -187,7 +192,11 @@ impl<'s> Engine<'s> {
             .zip(self.direct_sides())
         {
             let cells = &tallies.cells[grid.first_cell as usize..][..grid.cell_count()];
-            let (ga, gb) = relative_variances(cells, tallies.photons, tallies.direct_replicates);
+            let (ga, gb) = relative_variances(
+                cells,
+                (tallies.photons, tallies.counts().histories),
+                tallies.direct_replicates,
+            );
             (a, b) = (a + ga, b + gb);
             samples += samples_per_replicate(sides);
             floor = floor.max(replicate_floor(cells, tallies.direct_replicates));

@@ -10,7 +10,7 @@ use crate::stats::stop::{receiver_target_error, unreachable, StopReason, Target}
 use crate::stats::{map_stats, MapKind};
 use crate::tally::{ChunkTally, Tallies};
 use crate::trace::direct::DirectSchedule;
-use crate::trace::Tracer;
+use crate::trace::{Tracer, CHUNK_PHOTONS};
 use crate::{Error, Result};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
@@ -41,6 +41,9 @@ pub struct RunOptions {
     /// cell count, `trace::direct::points_per_side`). Annual runs lower it for sources
     /// whose direct light is a small part of every hour's variance.
     pub direct_points_per_side: Option<u32>,
+    /// Randomised QMC connection points, each chunk of photons one history
+    /// (`trace::Tracer::with_qmc`): the photons to stop at must be whole chunks.
+    pub qmc: bool,
 }
 
 impl RunOptions {
@@ -54,6 +57,7 @@ impl RunOptions {
             bvh: Bvh::Auto,
             estimator: None,
             direct_points_per_side: None,
+            qmc: scene.simulation.qmc,
         }
     }
 
@@ -293,6 +297,15 @@ fn validate(scene: &Scene, options: &RunOptions) -> Result<(Target, u64)> {
         ));
     }
     let max_photons = options.stop.max_photons();
+    if options.qmc && max_photons != u64::MAX && !max_photons.is_multiple_of(CHUNK_PHOTONS) {
+        return Err(Error::input(
+            "--photons",
+            format!(
+                "{max_photons} is not a whole number of the QMC run's blocks of \
+                 {CHUNK_PHOTONS} photons"
+            ),
+        ));
+    }
     Ok((target, max_photons))
 }
 

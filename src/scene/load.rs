@@ -508,6 +508,10 @@ fn simulation(value: toml::Value, origin: &str) -> Result<Simulation> {
         .remove("confidence")
         .map(|v| file::entry::<f64>(v, origin, "simulation.confidence"))
         .transpose()?;
+    let qmc = table
+        .remove("qmc")
+        .map(|v| file::entry::<bool>(v, origin, "simulation.qmc"))
+        .transpose()?;
     if let Some(c) = confidence {
         if !(c > 0.0 && c < 1.0) {
             return Err(Error::input(
@@ -516,9 +520,9 @@ fn simulation(value: toml::Value, origin: &str) -> Result<Simulation> {
             ));
         }
     }
-    // `seed`, `confidence` and the stop criteria's keys, named together when one is
-    // unknown.
-    let own: Vec<&str> = ["seed", "confidence"]
+    // `seed`, `confidence`, `qmc` and the stop criteria's keys, named together when one
+    // is unknown.
+    let own: Vec<&str> = ["seed", "confidence", "qmc"]
         .into_iter()
         .chain(crate::input::fields_of::<StopCriteria>().iter().copied())
         .collect();
@@ -529,5 +533,6 @@ fn simulation(value: toml::Value, origin: &str) -> Result<Simulation> {
         stop,
         seed: seed.unwrap_or(1),
         confidence: confidence.unwrap_or(super::DEFAULT_CONFIDENCE),
+        qmc: qmc.unwrap_or(false),
     })
 }

@@ -411,6 +411,9 @@ pub struct Simulation {
     /// Two-sided confidence of the receivers' figures' intervals (`confidence`, 0.95 by
     /// default). It changes no photon's numbers, so a checkpoint resumes under another.
     pub confidence: f64,
+    /// Randomised quasi-Monte Carlo connection points (`qmc`; `run --qmc`): see
+    /// `trace::Tracer::with_qmc`.
+    pub qmc: bool,
 }
 
 impl Default for Simulation {
@@ -419,6 +422,7 @@ impl Default for Simulation {
             stop: StopCriteria::default(),
             seed: 0,
             confidence: DEFAULT_CONFIDENCE,
+            qmc: false,
         }
     }
 }

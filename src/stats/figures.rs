@@ -178,6 +178,9 @@ pub fn mean_and_sigma(
     let n = counted().count() as f64;
     let photons = total.photon_moments(counts);
     let (_, photon_var) = photons.mean_and_variance();
+    if !counts.photon_variance_known() {
+        return (f64::NAN, 1.0);
+    }
     let direct_var: f64 = if counts.direct_replicates == 0 {
         0.0
     } else {

@@ -54,10 +54,12 @@ pub fn cell_value(c: &CellSums, counts: Counts) -> (f64, f64) {
         return (0.0, if counts.dark { 0.0 } else { f64::NAN });
     }
     let unit = counts.unit;
-    (
-        (p.value + direct_value) * unit,
-        (p.var + direct_var).sqrt() * unit,
-    )
+    let sigma = if counts.photon_variance_known() {
+        (p.var + direct_var).sqrt() * unit
+    } else {
+        f64::NAN
+    };
+    ((p.value + direct_value) * unit, sigma)
 }
 
 /// The photons' part of a cell, in the score unit (variances in it stay finite where
@@ -81,7 +83,7 @@ fn photon_part(c: &CellSums, counts: Counts) -> PhotonPart {
             ..PhotonPart::default()
         };
     }
-    let n = counts.photons as f64;
+    let n = counts.histories as f64;
     PhotonPart {
         value,
         var,
@@ -410,7 +412,7 @@ pub fn dark_upper_bound(counts: Counts, typical: (f64, f64)) -> f64 {
             0.0
         }
     };
-    (part(counts.photons, typical.0) + part(counts.direct_replicates, typical.1)) * counts.unit
+    (part(counts.histories, typical.0) + part(counts.direct_replicates, typical.1)) * counts.unit
 }
 
 /// The σ an unreliable cell is judged by: its own σ, which it cannot vouch for, widened
@@ -520,6 +522,7 @@ mod tests {
         cells[4] = cell(3);
         let counts = Counts {
             photons: n,
+            histories: n,
             direct_replicates: 0,
             dark: false,
             unit: 1.0,
@@ -556,6 +559,7 @@ mod tests {
             .collect();
         let counts = Counts {
             photons: 1000,
+            histories: 1000,
             direct_replicates: 0,
             dark: false,
             unit: 1.0,
@@ -578,6 +582,7 @@ mod tests {
         // k equal photon scores of 1 among 10⁶ histories: k − 1 degrees of freedom.
         let counts = Counts {
             photons: 1_000_000,
+            histories: 1_000_000,
             direct_replicates: 0,
             dark: false,
             unit: 2.0,
@@ -592,7 +597,7 @@ mod tests {
             c
         };
         let c = cell(20);
-        let (_, var) = c.photons.over(counts.photons).mean_and_variance();
+        let (_, var) = c.photons.over(counts.histories).mean_and_variance();
         let dof = cell_dof(&c, counts, var, 0.0);
         assert!((dof - 19.0).abs() < 1e-6, "{dof}");
         // A 4 × 4 receiver: 14 cells of 40 scores, one of 20, one of none.

@@ -116,9 +116,14 @@ fn cell_values_and_parts(
             }
             let (direct_value, direct_var) = direct_part(c, counts);
             let photon_var = pooled_variance(p.var, p.var_sd, pooled);
+            let sigma = if counts.photon_variance_known() {
+                (photon_var + direct_var).sqrt() * counts.unit
+            } else {
+                f64::NAN
+            };
             (
                 (p.value + direct_value) * counts.unit,
-                (photon_var + direct_var).sqrt() * counts.unit,
+                sigma,
                 (photon_var, direct_var),
             )
         })

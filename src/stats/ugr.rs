@@ -295,7 +295,8 @@ pub fn indirect_part(c: &CellSums, counts: Counts) -> (f64, f64) {
         return (0.0, 0.0);
     }
     let (value, var) = c.photon_moments(counts).mean_and_variance();
-    let sigma = if var >= 0.0 { var.sqrt() } else { f64::NAN };
+    let known = var >= 0.0 && counts.photon_variance_known();
+    let sigma = if known { var.sqrt() } else { f64::NAN };
     (value * counts.unit, sigma * counts.unit)
 }
 

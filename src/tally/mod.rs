@@ -274,8 +274,8 @@ pub struct CellSums {
 }
 
 impl CellSums {
-    /// Adds a chunk's partial whose first photon is `first` (call in photon order): the
-    /// histories since the cell's last score scored 0 here.
+    /// Adds a chunk's partial whose first history is `first` (call in history order):
+    /// the histories since the cell's last score scored 0 here.
     #[inline]
     fn add(&mut self, partial: &CellPartial, first: u64) {
         self.photons
@@ -295,7 +295,7 @@ impl CellSums {
 
     /// The photon histories' moments over all of `counts`' histories.
     pub fn photon_moments(&self, counts: Counts) -> Moments {
-        self.photons.over(counts.photons)
+        self.photons.over(counts.histories)
     }
 
     /// The direct light's moments over all of `counts`' replicates.
@@ -343,17 +343,37 @@ pub struct Tallies {
     pub dark: bool,
     /// The unit of the cells' scores ([`score_unit`]), in the receivers' units.
     pub score_unit: f64,
+    /// Photons per history of the cells' moments: 1, or a QMC run's block of
+    /// 2^[`crate::rng::QMC_LOG2_BLOCK`] photons, whose points are not independent but
+    /// whose blocks are ([`Tallies::set_qmc_blocks`]).
+    pub photons_per_history: u64,
 }
 
 /// What a cell's sums were accumulated over.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Counts {
     pub photons: u64,
+    /// The histories of the cells' photon moments: the photons, or a QMC run's blocks.
+    pub histories: u64,
     pub direct_replicates: u64,
     /// No light at all: nothing scored means exactly 0.
     pub dark: bool,
     /// The unit of the cells' scores ([`score_unit`]).
     pub unit: f64,
+}
+
+/// Blocks a QMC run's photons' variance needs before it is reported: 31 degrees of
+/// freedom, where a cell's σ is judged reliable (`stats::cell_status`); below, every
+/// σ that the photons' part enters is unknown.
+pub const MIN_QMC_BLOCKS: u64 = 32;
+
+impl Counts {
+    /// Whether the photons' variance is known: always for histories of one photon
+    /// (a cell that nothing reached is the stats' concern), for a QMC run's blocks
+    /// from [`MIN_QMC_BLOCKS`] of them.
+    pub fn photon_variance_known(&self) -> bool {
+        self.histories == self.photons || self.histories >= MIN_QMC_BLOCKS
+    }
 }
 
 impl Tallies {
@@ -363,13 +383,27 @@ impl Tallies {
             triangle_hits: TriangleCounts::zeros(triangles * CODES_PER_TRIANGLE),
             cells: vec![CellSums::default(); cells],
             score_unit,
+            photons_per_history: 1,
             ..Tallies::default()
         }
     }
 
+    /// Makes every history of the cells' moments a block of a QMC run
+    /// (`blocks`), or one photon. Only on empty tallies: their moments are over one or
+    /// the other.
+    pub fn set_qmc_blocks(&mut self, blocks: bool) {
+        debug_assert_eq!(self.photons, 0);
+        self.photons_per_history = if blocks {
+            1 << crate::rng::QMC_LOG2_BLOCK
+        } else {
+            1
+        };
+    }
+
     /// Folds one chunk of `photons` photons in (call in photon order).
     pub fn accumulate(&mut self, chunk: &ChunkTally, photons: u64) {
-        let first = self.photons;
+        // A QMC run's chunks are whole blocks (`trace::Tracer::trace_chunk_into`).
+        let first = self.photons / self.photons_per_history.max(1);
         self.photons += photons;
         self.rays += chunk.rays;
         self.killed_by_bounce_cap += chunk.killed_by_bounce_cap;
@@ -386,6 +420,7 @@ impl Tallies {
     pub fn counts(&self) -> Counts {
         Counts {
             photons: self.photons,
+            histories: self.photons / self.photons_per_history.max(1),
             direct_replicates: self.direct_replicates,
             dark: self.dark,
             unit: self.score_unit,

@@ -121,6 +121,8 @@ pub(super) struct Lanes {
     /// every live photon, since all start together and each bounce ends or advances
     /// every one of them.
     pub(super) bounces: u32,
+    /// The chunk's first photon index.
+    pub(super) first: u64,
     /// Where the current segment started.
     pub(super) segment: Vec<Segment>,
     pub(super) rng: Vec<Pcg32>,

@@ -577,14 +577,19 @@ pub fn replicate_floor(cells: &[CellSums], replicates: u64) -> u64 {
 }
 
 /// Σ over cells of the relative variances of one direct replicate (a) and of one photon
-/// history (b), for [`DirectSchedule::from_variances`]. Cells without a value are left
-/// out.
-pub fn relative_variances(cells: &[CellSums], photons: u64, replicates: u64) -> (f64, f64) {
+/// (b: N times the variance of the photons' mean), for [`DirectSchedule::from_variances`];
+/// the cells' photon moments are over `histories` (the photons, or a QMC run's blocks).
+/// Cells without a value are left out.
+pub fn relative_variances(
+    cells: &[CellSums],
+    (photons, histories): (u64, u64),
+    replicates: u64,
+) -> (f64, f64) {
     let (mut a, mut b) = (0.0, 0.0);
     for c in cells {
-        // Per replicate and per history: n times the variance of the mean.
+        // Per replicate and per photon: n times the variance of the mean.
         let (direct, direct_var) = c.direct.over(replicates).mean_and_variance();
-        let (photon, photon_var) = c.photons.over(photons).mean_and_variance();
+        let (photon, photon_var) = c.photons.over(histories).mean_and_variance();
         let value = direct + photon;
         if !(value > 0.0) {
             continue;

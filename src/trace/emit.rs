@@ -3,7 +3,7 @@
 //! What each kind emits lives in `crate::light`; nothing here knows the kinds.
 
 use crate::light::{BoundingSphere, Emitter, Incoming};
-use crate::rng::PhotonStreams;
+use crate::rng::{qmc_square, PhotonStreams, QmcDraw};
 use crate::scene::Scene;
 use glam::DVec3;
 use rand_pcg::Pcg32;
@@ -89,6 +89,24 @@ impl Emitters {
         }
         crate::light::emission_lanes_one_by_one(streams, rngs, o, d, |k, rng| {
             self.sample(self.light_of(streams.first + k as u64), rng)
+        });
+    }
+
+    /// [`Emitters::sample_lanes`] for a QMC run seeded with `seed`: each photon's
+    /// direction from its joint point's emission pair ([`QmcDraw::Emission`]), photon
+    /// by photon.
+    pub fn sample_lanes_qmc(
+        &self,
+        seed: u64,
+        streams: PhotonStreams,
+        rngs: &mut [Pcg32],
+        o: [&mut [f32]; 3],
+        d: [&mut [f32]; 3],
+    ) {
+        crate::light::emission_lanes_one_by_one(streams, rngs, o, d, |k, rng| {
+            let photon = streams.first + k as u64;
+            let direction = qmc_square(seed, photon, QmcDraw::Emission);
+            self.emitters[self.light_of(photon)].sample_emission_from(direction, rng)
         });
     }
 

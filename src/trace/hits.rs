@@ -280,6 +280,7 @@ impl Tracer<'_> {
         // Every live photon has hit as often: the first hit is direct light, and so is
         // a later one of an emitted segment (passed on straight by glazing).
         let hit_bounces = s.lanes.bounces;
+        let first_photon = s.lanes.first;
         let capped = hit_bounces >= self.max_bounces;
         let map = pass == Pass::Map;
         let first_deposit = tally.deposits.len();
@@ -330,6 +331,7 @@ impl Tracer<'_> {
                     -dir,
                     surfacing,
                     (offset, &mut out.survivors.rng[k]),
+                    (first_photon + offset as u64, hit_bounces, !map),
                     (flux * weight, !indirect),
                     &mut s.shadow_rays,
                     &mut s.shadow_scores,

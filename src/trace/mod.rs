@@ -31,7 +31,7 @@ pub mod scatter;
 pub mod shadow;
 
 use crate::accel::{RayBatch, RayCaster};
-use crate::rng::PhotonStreams;
+use crate::rng::{qmc_square, PhotonStreams, QmcDraw};
 use crate::sampling::{cosine_from_square, uniform_f32};
 use crate::scene::{Estimator, Geometry, Scene};
 use crate::surface::Transport;
@@ -52,6 +52,7 @@ use scatter::{offset_origin, offset_origins};
 /// Photons traced together as one batch and tallied as one chunk. Chunks are fixed
 /// ranges of photon indices, which keeps the merge order independent of threads.
 pub const CHUNK_PHOTONS: u64 = 4096;
+const _: () = assert!(CHUNK_PHOTONS == 1 << crate::rng::QMC_LOG2_BLOCK);
 
 /// Everything a worker needs to trace photons; shared read-only by all workers.
 pub struct Tracer<'a> {
@@ -92,6 +93,8 @@ pub struct Tracer<'a> {
     /// The scene's portals (local frame), and the outsides of those that have one.
     portals: Vec<crate::light::distant::Portal>,
     exteriors: Vec<portal_photons::Exterior>,
+    /// [`Tracer::with_qmc`].
+    qmc: bool,
 }
 
 impl<'a> Tracer<'a> {
@@ -171,13 +174,26 @@ impl<'a> Tracer<'a> {
             portals_on,
             portals,
             exteriors,
+            qmc: false,
         }
+    }
+
+    /// With `qmc`, the emission's directions and the receivers' next-event connection
+    /// points are randomised QMC over each chunk ([`qmc_square`]): the direction and
+    /// the first vertex's connections of a photon are two pairs of one Sobol' point,
+    /// stratified together, every later connection a pair of its own. Each chunk is one
+    /// block, whose scores are one history of the cells' moments
+    /// ([`Tallies::set_qmc_blocks`]): only blocks are independent.
+    pub fn with_qmc(mut self, qmc: bool) -> Self {
+        self.qmc = qmc;
+        self
     }
 
     /// Empty tallies for this scene's triangles and receiver cells.
     pub fn new_tallies(&self) -> Tallies {
         let unit = self.emitters.score_unit;
         let mut t = Tallies::new(self.geometry.triangle_count(), self.tally_slots(), unit);
+        t.set_qmc_blocks(self.qmc);
         t.dark = !(self.emitters.total_flux_lm > 0.0);
         t
     }
@@ -237,6 +253,16 @@ impl<'a> Tracer<'a> {
             }
             scratch.next_spawns.clear();
         }
+        if self.qmc {
+            // The block is the history: its photons' points are stratified together, so
+            // only blocks are independent. Its score is the mean over its photons (each
+            // chunk a whole block: QMC runs trace whole chunks).
+            debug_assert!(first.is_multiple_of(CHUNK_PHOTONS) && count as u64 == CHUNK_PHOTONS);
+            for (offset, _, x) in scratch.pending.iter_mut() {
+                *offset = 0;
+                *x /= CHUNK_PHOTONS as f64;
+            }
+        }
         fold_histories(
             &mut scratch.pending,
             &self.total_spans,
@@ -269,15 +295,17 @@ impl<'a> Tracer<'a> {
             }));
         }
         lanes.offset.extend(0..live as u32);
+        lanes.first = first;
         // Each photon's stream is seeded where its emission draws from it.
         lanes.rng.resize(live, Pcg32::new(0, 0));
         let streams = PhotonStreams::new(self.seed, first);
-        self.emitters.sample_lanes(
-            streams,
-            &mut lanes.rng,
-            [&mut rays.ox, &mut rays.oy, &mut rays.oz],
-            [&mut rays.dx, &mut rays.dy, &mut rays.dz],
-        );
+        let o: [&mut [f32]; 3] = [&mut rays.ox, &mut rays.oy, &mut rays.oz];
+        let d: [&mut [f32]; 3] = [&mut rays.dx, &mut rays.dy, &mut rays.dz];
+        if self.qmc {
+            (self.emitters).sample_lanes_qmc(self.seed, streams, &mut lanes.rng, o, d);
+        } else {
+            self.emitters.sample_lanes(streams, &mut lanes.rng, o, d);
+        }
         // An emitter that forgot to write a photon's stream back would leave every photon
         // on the placeholder's one stream: plausible results, all correlated.
         debug_assert!(lanes.rng.iter().all(|r| *r != Pcg32::new(0, 0)));
@@ -496,6 +524,7 @@ impl<'a> Tracer<'a> {
         wo: DVec3,
         surfacing: &Surfacing,
         (offset, rng): (u32, &mut Pcg32),
+        (photon, depth, spawned): (u64, u32, bool),
         (flux, lit_directly): (f64, bool),
         shadow_rays: &mut RayBatch,
         shadow_scores: &mut Vec<(u32, u32, f64)>,
@@ -503,13 +532,25 @@ impl<'a> Tracer<'a> {
         let bsdf = &surfacing.bsdf;
         let n = normal.as_dvec3();
         let facing = if wo.dot(n) >= 0.0 { normal } else { -normal };
-        for (r, stratum) in self
+        for (k, r, stratum) in self
             .receivers
             .iter()
-            .filter(|r| r.estimator.connects() && !(lit_directly && r.samples_reflected_direct()))
-            .flat_map(|r| (0..r.connections).map(move |s| (r, s)))
+            .enumerate()
+            .filter(|(_, r)| {
+                r.estimator.connects() && !(lit_directly && r.samples_reflected_direct())
+            })
+            .flat_map(|(k, r)| (0..r.connections).map(move |s| (k, r, s)))
         {
-            let Some(c) = r.connect(p.as_dvec3(), stratum, rng) else {
+            let square = self.qmc.then(|| {
+                let draw = if depth == 0 && !spawned {
+                    QmcDraw::FirstConnection
+                } else {
+                    let pair = ((depth as u64) << 40) ^ ((k as u64) << 20) ^ stratum as u64;
+                    QmcDraw::Padded(pair ^ ((spawned as u64) << 60))
+                };
+                qmc_square(self.seed, photon, draw)
+            });
+            let Some(c) = r.connect(p.as_dvec3(), stratum, square, rng) else {
                 continue;
             };
             // Near the receiver the connection's 1/d² makes the variance infinite: the

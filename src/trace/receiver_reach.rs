@@ -122,12 +122,19 @@ impl ReceiverGrid {
     /// meter's cone and follows it to the receiver (factor = 1/(A_cell·|cos θ_r|)), so
     /// every vertex a meter can see contributes, however close the meter is to it.
     #[inline]
-    pub fn connect(&self, x: DVec3, stratum: u32, rng: &mut Pcg32) -> Option<Connection> {
+    pub fn connect(
+        &self,
+        x: DVec3,
+        stratum: u32,
+        square: Option<(f64, f64)>,
+        rng: &mut Pcg32,
+    ) -> Option<Connection> {
         let strata = self.connections as f64;
         match self.kind {
             Kind::Illuminance | Kind::Cylindrical | Kind::SemiCylindrical { .. } => {
                 // Stratum s of the receiver is the strip s/n ≤ a < (s+1)/n along u.
-                let (a, b) = ((stratum as f64 + uniform(rng)) / strata, uniform(rng));
+                let (u, v) = square.unwrap_or_else(|| (uniform(rng), uniform(rng)));
+                let (a, b) = ((stratum as f64 + u) / strata, v);
                 let cell = self.cell_at(a, b);
                 // A point receiver's cell, picked as uniformly, scores at its centre.
                 let point = if self.points {

@@ -76,6 +76,13 @@ pub fn command(args: AnnualArgs) -> Result<()> {
         annual.sda_halfwidth = Some(h);
     }
     let mut options = RunOptions::from_scene(&scene);
+    if options.qmc {
+        eprintln!(
+            "luxtally: [simulation] qmc is not used by annual runs (their sources' photons \
+             are not whole blocks)"
+        );
+        options.qmc = false;
+    }
     options.seed = args.seed.unwrap_or(options.seed);
     options.threads = args.threads.unwrap_or(options.threads);
     options.backend = args.backend.unwrap_or(options.backend);

@@ -46,7 +46,8 @@ impl Cluster {
         let _ = ctrlc::set_handler(|| {});
         let threads = options.threads.max(1);
         let pool = luxtally::run::thread_pool(threads)?;
-        let tracer = Tracer::new(scene, caster, options.seed, options.estimator);
+        let tracer =
+            Tracer::new(scene, caster, options.seed, options.estimator).with_qmc(options.qmc);
         serve(&self.universe.world(), &tracer, &pool);
         Ok(())
     }

@@ -41,6 +41,11 @@ pub struct RunArgs {
     /// (default: each receiver's own `estimator`).
     #[arg(long, hide_possible_values = true)]
     pub estimator: Option<Estimator>,
+    /// Randomised quasi-Monte Carlo connection points to the receivers (Owen-scrambled
+    /// Sobol' per block of 4096 photons, each block one history of the statistics);
+    /// --photons is rounded up to whole blocks (default: the scene's [simulation] qmc).
+    #[arg(long)]
+    pub qmc: bool,
     /// No progress line.
     #[arg(long)]
     pub quiet: bool,
@@ -142,6 +147,15 @@ pub fn run_options(args: &RunArgs, scene: &Scene) -> Result<RunOptions> {
     options.backend = args.backend.unwrap_or(options.backend);
     options.bvh = args.bvh.unwrap_or(options.bvh);
     options.estimator = args.estimator.or(options.estimator);
+    options.qmc |= args.qmc;
+    if options.qmc {
+        // A QMC run traces whole blocks: its last one is never cut short.
+        let block = luxtally::trace::CHUNK_PHOTONS;
+        options.stop.photons = options
+            .stop
+            .photons
+            .map(|p| p.div_ceil(block).saturating_mul(block));
+    }
     if let Some(s) = args.report_every {
         if !(s > 0.0 && s.is_finite()) {
             return Err(Error::input(

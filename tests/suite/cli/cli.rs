@@ -563,24 +563,22 @@ fn annual_runs_and_refuses_bad_input_in_one_line() {
     }
 }
 
-/// `bench-accuracy` ends with the rays to each goal down to its target: one row per
-/// goal, each run stopped at its error, photons and rays growing as the goal tightens.
-#[test]
-fn bench_accuracy_reports_the_rays_to_each_goal() {
-    let out = luxtally(&[
+/// `bench-accuracy` on the office to 2 % with `extra` flags: its output and the rows of
+/// its rays table.
+fn bench_accuracy_table(extra: &[&str]) -> (String, Vec<Vec<f64>>) {
+    let args = [
         "bench-accuracy",
         "scenes/office.toml",
         "--target-error",
         "0.02",
-        "--threads",
-        "2",
-    ]);
+    ];
+    let out = luxtally(&[&args[..], &["--threads", "2"], extra].concat());
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let text = String::from_utf8_lossy(&out.stdout);
+    let text = String::from_utf8_lossy(&out.stdout).to_string();
     let header = "| goal % | photons | photon rays | direct rays | rays | elapsed s | error % |";
     let table = text.split(header).nth(1).expect("the rays table");
     let rows: Vec<Vec<f64>> = (table.lines().skip(2))
@@ -592,10 +590,31 @@ fn bench_accuracy_reports_the_rays_to_each_goal() {
         })
         .collect();
     assert_eq!(rows.len(), 2, "goals 5 and 2 %: {table}");
+    (text, rows)
+}
+
+/// `bench-accuracy` ends with the rays to each goal down to its target: one row per
+/// goal, each run stopped at its error, photons and rays growing as the goal tightens.
+#[test]
+fn bench_accuracy_reports_the_rays_to_each_goal() {
+    let (_, rows) = bench_accuracy_table(&[]);
     for (row, goal) in rows.iter().zip([5.0, 2.0]) {
         assert_eq!(row[0], goal);
         assert!(row[6] <= goal, "error {} beyond its goal {goal}", row[6]);
         assert_eq!(row[4], row[2] + row[3], "rays add up");
     }
     assert!(rows[1][1] > rows[0][1] && rows[1][4] > rows[0][4]);
+}
+
+/// `bench-accuracy --qmc` measures the QMC run: its heading says so, and every run of its
+/// table stops on whole blocks, none before the 32 whose σ is reported.
+#[test]
+fn bench_accuracy_measures_qmc_runs() {
+    let (text, rows) = bench_accuracy_table(&["--qmc"]);
+    assert!(text.contains("next_event estimator, QMC"), "{text}");
+    let photons: Vec<u64> = rows.iter().map(|r| r[1] as u64).collect();
+    assert!(
+        photons.iter().all(|&p| p % 4096 == 0 && p >= 32 * 4096),
+        "{photons:?}"
+    );
 }

@@ -377,14 +377,7 @@ fn portal_photons_give_the_same_bits_on_any_threads_and_shards() {
         "3",
         "--quiet",
     ];
-    let run = |name: &str, extra: &[&str]| {
-        let dir = temp_dir(name);
-        let mut args = base.to_vec();
-        args.extend_from_slice(extra);
-        args.extend_from_slice(&["--out", dir.to_str().unwrap()]);
-        ok(luxtally(&args));
-        dir
-    };
+    let run = |name: &str, extra: &[&str]| run_in(name, &base, extra);
     let one = run("portal_t1", &["--threads", "1"]);
     let two = run("portal_t2", &["--threads", "2"]);
     assert_identical(&one, &two);
@@ -403,6 +396,57 @@ fn portal_photons_give_the_same_bits_on_any_threads_and_shards() {
         merged.to_str().unwrap(),
     ]));
     assert_identical(&one, &merged);
+}
+
+/// A QMC run (`--qmc`) is a pure function of the photon index too: one thread, two, two
+/// shards merged, and a run resumed from a smaller one's checkpoint give the same bits;
+/// --photons rounds up to whole blocks; resuming without --qmc is refused in one line.
+#[test]
+fn qmc_runs_give_the_same_bits_on_any_threads_shards_and_resumes() {
+    let base = ["run", SCENE, "--seed", "5", "--quiet", "--qmc"];
+    let run = |name: &str, extra: &[&str]| run_in(name, &base, extra);
+    let photons = ["--photons", "300000"];
+    let one = run("qmc_t1", &[&photons[..], &["--threads", "1"]].concat());
+    assert_eq!(
+        numbers_of(&one)["photons_emitted"],
+        303_104,
+        "74 whole blocks"
+    );
+    let two = run("qmc_t2", &[&photons[..], &["--threads", "2"]].concat());
+    assert_identical(&one, &two);
+    let shards: Vec<String> = (0..2)
+        .map(|i| {
+            let shard = format!("{i}/2");
+            let dir = run(
+                &format!("qmc_shard{i}"),
+                &[&photons[..], &["--shard", &shard]].concat(),
+            );
+            dir.to_str().unwrap().to_string()
+        })
+        .collect();
+    let merged = temp_dir("qmc_merged");
+    ok(luxtally(&[
+        "merge",
+        &shards[0],
+        &shards[1],
+        "--out",
+        merged.to_str().unwrap(),
+    ]));
+    assert_identical(&one, &merged);
+    let first = run("qmc_first", &["--photons", "150000"]);
+    let resumed = ["--resume", first.to_str().unwrap()];
+    ok(luxtally(&[&base[..], &photons[..], &resumed[..]].concat()));
+    assert_identical(&one, &first);
+    let plain = [&base[..5], &photons[..], &resumed[..]].concat();
+    assert_one_line(&luxtally(&plain), &["QMC differs"]);
+}
+
+/// Runs `base` and `extra` into a fresh folder `name`, which it returns.
+fn run_in(name: &str, base: &[&str], extra: &[&str]) -> PathBuf {
+    let dir = temp_dir(name);
+    let out = ["--out", dir.to_str().unwrap()];
+    ok(luxtally(&[base, extra, &out[..]].concat()));
+    dir
 }
 
 fn assert_one_line(out: &Output, needles: &[&str]) {

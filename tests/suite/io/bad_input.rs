@@ -329,6 +329,10 @@ fn bad_receiver_and_simulation_parameters_are_rejected() {
         let m = error_of(&format!("[simulation]\nconfidence = {bad}\n"));
         assert_has(&m, &["simulation.confidence", "between 0 and 1"]);
     }
+    let m = error_of("[simulation]\nqmc = \"yes\"\n");
+    assert_has(&m, &["simulation.qmc"]);
+    let m = error_of("[simulation]\nqcm = true\n");
+    assert_has(&m, &["qcm", "qmc"]);
     let m = error_of("[simulation]\nphotons = -3\n");
     assert_has(&m, &["simulation.photons"]);
     let m = error_of("[simulation]\ntime_limit = 0\n");

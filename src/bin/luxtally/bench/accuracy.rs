@@ -26,6 +26,9 @@ pub struct BenchAccuracyArgs {
     pub estimator: Option<Estimator>,
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Randomised QMC, as `run --qmc` (default: the scene's [simulation] qmc).
+    #[arg(long)]
+    pub qmc: bool,
 }
 
 /// Time to `--target-error` (or `--time-limit` seconds) on a receiver, the scene's
@@ -43,7 +46,7 @@ pub fn command(args: BenchAccuracyArgs) -> Result<()> {
     let report = bench_accuracy(
         &scene,
         &receiver,
-        args.estimator,
+        (args.estimator, args.qmc),
         args.target_error,
         args.time_limit,
         args.threads.unwrap_or_else(super::all_cores),
@@ -64,12 +67,13 @@ pub fn command(args: BenchAccuracyArgs) -> Result<()> {
 fn bench_accuracy(
     scene: &Scene,
     receiver: &str,
-    estimator: Option<Estimator>,
+    (estimator, qmc): (Option<Estimator>, bool),
     target: f64,
     time_limit_s: f64,
     threads: usize,
     progress: &dyn Fn(&str),
 ) -> Result<String> {
+    let from_scene = RunOptions::from_scene(scene);
     let options = RunOptions {
         stop: StopCriteria {
             time_limit_s: Some(time_limit_s),
@@ -79,7 +83,8 @@ fn bench_accuracy(
         },
         threads,
         estimator,
-        ..RunOptions::from_scene(scene)
+        qmc: qmc || from_scene.qmc,
+        ..from_scene
     };
     progress(&format!(
         "receiver:{receiver} to {:.1} % (at most {time_limit_s} s)",
@@ -95,9 +100,10 @@ fn bench_accuracy(
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "### {} / {receiver} ({} estimator, target {:.1} %)\n",
+        "### {} / {receiver} ({} estimator{}, target {:.1} %)\n",
         scene.name,
         r.estimator,
+        if options.qmc { ", QMC" } else { "" },
         100.0 * target
     );
     let _ = writeln!(out, "{}\n", run_line(&result, &summary));
