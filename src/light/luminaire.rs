@@ -251,6 +251,10 @@ impl Emitter for LuminaireEmitter {
     }
 
     /// `direction` picks the photometric grid's cell (its alias table's two numbers).
+    fn direction_from_square(&self) -> bool {
+        true
+    }
+
     fn sample_emission_from(&self, direction: (f64, f64), rng: &mut Pcg32) -> (DVec3, DVec3) {
         let p = self.position + self.frame * self.photometry.opening.sample_point_m(rng);
         let w = self.photometry.sample_direction_from(direction, rng);

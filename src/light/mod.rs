@@ -163,6 +163,12 @@ pub trait Emitter: Debug + Send + Sync {
         self.sample_emission(rng)
     }
 
+    /// Whether [`Emitter::sample_emission_from`] takes its direction from the numbers
+    /// given (else a QMC run emits as an ordinary one, in lanes where it can).
+    fn direction_from_square(&self) -> bool {
+        false
+    }
+
     /// The light arriving at local point `p` (method.md eqs. 1–2), piece by piece: one
     /// piece for a point-like or directional source; for a source with an extent one per
     /// point of `area_pattern` ([0, 1)² coordinates), each an equal share of the source.

@@ -81,6 +81,10 @@ impl Emitter for PointEmitter {
         (self.position, uniform_sphere(rng))
     }
 
+    fn direction_from_square(&self) -> bool {
+        true
+    }
+
     fn sample_emission_from(&self, (u, v): (f64, f64), _: &mut Pcg32) -> (DVec3, DVec3) {
         // As the lanes map theirs, in f32 (rounding below 1: the square is half-open).
         const BELOW_ONE: f32 = 1.0 - f32::EPSILON / 2.0;

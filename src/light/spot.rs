@@ -141,6 +141,10 @@ impl Emitter for SpotEmitter {
     /// The first proposal from `direction`, later ones (after a rejection) from `rng`:
     /// each proposal is uniform in the cone and independent of the test, so the
     /// density is `sample_emission`'s.
+    fn direction_from_square(&self) -> bool {
+        true
+    }
+
     fn sample_emission_from(&self, direction: (f64, f64), rng: &mut Pcg32) -> (DVec3, DVec3) {
         let dir = cone_from_square(self.axis, self.cos_cone, 1.0, direction);
         if uniform(rng) < spot_profile(dir.dot(self.axis), self.cos_cone, self.cos_falloff) {

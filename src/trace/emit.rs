@@ -94,7 +94,7 @@ impl Emitters {
 
     /// [`Emitters::sample_lanes`] for a QMC run seeded with `seed`: each photon's
     /// direction from its joint point's emission pair ([`QmcDraw::Emission`]), photon
-    /// by photon.
+    /// by photon; as `sample_lanes` where no source takes its direction so.
     pub fn sample_lanes_qmc(
         &self,
         seed: u64,
@@ -103,6 +103,9 @@ impl Emitters {
         o: [&mut [f32]; 3],
         d: [&mut [f32]; 3],
     ) {
+        if !self.emitters.iter().any(|e| e.direction_from_square()) {
+            return self.sample_lanes(streams, rngs, o, d);
+        }
         crate::light::emission_lanes_one_by_one(streams, rngs, o, d, |k, rng| {
             let photon = streams.first + k as u64;
             let direction = qmc_square(seed, photon, QmcDraw::Emission);
