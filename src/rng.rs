@@ -99,10 +99,10 @@ pub fn direct_stream(seed: u64, cell: u64, replicate: u64) -> Pcg32 {
     )
 }
 
-/// Photons per block of a randomised quasi-Monte Carlo (QMC) run, 2^12: each block of
+/// Photons per block of a randomised quasi-Monte Carlo (QMC) run, 2^11: each block of
 /// photon indices (`i >> QMC_LOG2_BLOCK`) is scrambled on its own, so blocks are
 /// independent replicates and the statistics take each block as one history.
-pub const QMC_LOG2_BLOCK: u32 = 12;
+pub const QMC_LOG2_BLOCK: u32 = 11;
 
 /// What a QMC draw of a photon takes: two dimensions of its joint Sobol' point (the
 /// emission's direction, dimensions 0 and 1, and its first vertex's connection points,
@@ -120,8 +120,8 @@ pub enum QmcDraw {
 /// shuffled and each dimension Owen-scrambled by hashes of (seed, block, pair) (Burley
 /// 2020, "Practical Hash-based Owen Scrambling"). Every point is uniform on [0, 1)²
 /// (so each estimate stays unbiased), and a block's points of a pair are a
-/// (0, 12, 2)-net (the emission's and the padded pairs; the first connection's, Sobol's
-/// dimensions 2 and 3, a (2, 12, 2)-net): a block stratifies what they pick.
+/// (0, 11, 2)-net (the emission's and the padded pairs; the first connection's, Sobol's
+/// dimensions 2 and 3, a (2, 11, 2)-net): a block stratifies what they pick.
 #[inline]
 pub fn qmc_square(seed: u64, photon: u64, draw: QmcDraw) -> (f64, f64) {
     let (pair, first_dimension) = match draw {
@@ -206,25 +206,28 @@ mod tests {
     use super::*;
     use rand::RngCore;
 
-    /// Points of `draw` of photons `first .. first + 4096` (one block), on a 2^12 grid.
+    const M: u32 = QMC_LOG2_BLOCK;
+
+    /// Points of `draw` of the block of photons from `first`, on a 2^M × 2^M grid.
     fn block_points(seed: u64, first: u64, draw: QmcDraw) -> Vec<(u32, u32)> {
-        (first..first + 4096)
+        let side = (1u64 << M) as f64;
+        (first..first + (1 << M))
             .map(|i| {
                 let (u, v) = qmc_square(seed, i, draw);
                 assert!((0.0..1.0).contains(&u) && (0.0..1.0).contains(&v));
-                ((u * 4096.0) as u32, (v * 4096.0) as u32)
+                ((u * side) as u32, (v * side) as u32)
             })
             .collect()
     }
 
-    /// Whether every box of 2^a × 2^(12−t−a) cells, for every a, holds exactly 2^t
-    /// points: a (t, 12, 2)-net.
+    /// Whether every box of 2^a × 2^(M−t−a) cells, for every a, holds exactly 2^t
+    /// points: a (t, M, 2)-net.
     fn is_a_net(points: &[(u32, u32)], t: u32) -> bool {
-        let m = 12 - t;
+        let m = M - t;
         (0..=m).all(|a| {
             let mut count = vec![0u32; 1 << m];
             for &(u, v) in points {
-                count[(((u >> (12 - a)) << (m - a)) | (v >> (12 - m + a))) as usize] += 1;
+                count[(((u >> (M - a)) << (m - a)) | (v >> (M - m + a))) as usize] += 1;
             }
             count.iter().all(|&c| c == 1 << t)
         })
@@ -232,8 +235,8 @@ mod tests {
 
     #[test]
     fn a_qmc_block_is_a_net_and_blocks_are_scrambled_apart() {
-        // Sobol's dimensions 2 and 3 together are a (2, 12, 2)-net, each alone a
-        // (0, 12, 1)-net (the boxes of one row or one column).
+        // Sobol's dimensions 2 and 3 together are a (2, M, 2)-net, each alone a
+        // (0, M, 1)-net (the boxes of one row or one column).
         let draws = [
             (QmcDraw::Emission, 0),
             (QmcDraw::Padded(7), 0),

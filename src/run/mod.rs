@@ -301,7 +301,7 @@ fn validate(scene: &Scene, options: &RunOptions) -> Result<(Target, u64)> {
         return Err(Error::input(
             "--photons",
             format!(
-                "{max_photons} is not a whole number of the QMC run's blocks of \
+                "{max_photons} is not a whole number of the QMC run's chunks of \
                  {CHUNK_PHOTONS} photons"
             ),
         ));

@@ -52,7 +52,7 @@ use scatter::{offset_origin, offset_origins};
 /// Photons traced together as one batch and tallied as one chunk. Chunks are fixed
 /// ranges of photon indices, which keeps the merge order independent of threads.
 pub const CHUNK_PHOTONS: u64 = 4096;
-const _: () = assert!(CHUNK_PHOTONS == 1 << crate::rng::QMC_LOG2_BLOCK);
+const _: () = assert!(CHUNK_PHOTONS.is_multiple_of(1 << crate::rng::QMC_LOG2_BLOCK));
 
 /// Everything a worker needs to trace photons; shared read-only by all workers.
 pub struct Tracer<'a> {
@@ -184,8 +184,15 @@ impl<'a> Tracer<'a> {
     /// stratified together, every later connection a pair of its own. Each chunk is one
     /// block, whose scores are one history of the cells' moments
     /// ([`Tallies::set_qmc_blocks`]): only blocks are independent.
+    /// Receivers whose connection points are QMC's (not the luminance meters', drawn in
+    /// their cones) take [`crate::tally::receiver_grid::qmc_connections_for`] of them.
     pub fn with_qmc(mut self, qmc: bool) -> Self {
         self.qmc = qmc;
+        if qmc {
+            for r in self.receivers.iter_mut().filter(|r| !r.is_luminance()) {
+                r.connections = crate::tally::receiver_grid::qmc_connections_for(r.cell_count());
+            }
+        }
         self
     }
 
@@ -255,12 +262,12 @@ impl<'a> Tracer<'a> {
         }
         if self.qmc {
             // The block is the history: its photons' points are stratified together, so
-            // only blocks are independent. Its score is the mean over its photons (each
-            // chunk a whole block: QMC runs trace whole chunks).
+            // only blocks are independent. Its score is the mean over its photons (a
+            // chunk holds whole blocks, and QMC runs trace whole chunks).
             debug_assert!(first.is_multiple_of(CHUNK_PHOTONS) && count as u64 == CHUNK_PHOTONS);
             for (offset, _, x) in scratch.pending.iter_mut() {
-                *offset = 0;
-                *x /= CHUNK_PHOTONS as f64;
+                *offset >>= crate::rng::QMC_LOG2_BLOCK;
+                *x /= (1u64 << crate::rng::QMC_LOG2_BLOCK) as f64;
             }
         }
         fold_histories(
@@ -532,6 +539,10 @@ impl<'a> Tracer<'a> {
         let bsdf = &surfacing.bsdf;
         let n = normal.as_dvec3();
         let facing = if wo.dot(n) >= 0.0 { normal } else { -normal };
+        // A QMC run's first vertex: one point for all its connections, each shifted into
+        // its stratum (the point's pair with the emission's direction).
+        let first_square = (self.qmc && depth == 0 && !spawned)
+            .then(|| qmc_square(self.seed, photon, QmcDraw::FirstConnection));
         for (k, r, stratum) in self
             .receivers
             .iter()
@@ -541,14 +552,12 @@ impl<'a> Tracer<'a> {
             })
             .flat_map(|(k, r)| (0..r.connections).map(move |s| (k, r, s)))
         {
-            let square = self.qmc.then(|| {
-                let draw = if depth == 0 && !spawned {
-                    QmcDraw::FirstConnection
-                } else {
+            let square = first_square.or_else(|| {
+                self.qmc.then(|| {
                     let pair = ((depth as u64) << 40) ^ ((k as u64) << 20) ^ stratum as u64;
-                    QmcDraw::Padded(pair ^ ((spawned as u64) << 60))
-                };
-                qmc_square(self.seed, photon, draw)
+                    let draw = QmcDraw::Padded(pair ^ ((spawned as u64) << 60));
+                    qmc_square(self.seed, photon, draw)
+                })
             });
             let Some(c) = r.connect(p.as_dvec3(), stratum, square, rng) else {
                 continue;

@@ -42,8 +42,9 @@ pub struct RunArgs {
     #[arg(long, hide_possible_values = true)]
     pub estimator: Option<Estimator>,
     /// Randomised quasi-Monte Carlo connection points to the receivers (Owen-scrambled
-    /// Sobol' per block of 4096 photons, each block one history of the statistics);
-    /// --photons is rounded up to whole blocks (default: the scene's [simulation] qmc).
+    /// Sobol' per block of 2048 photons, each block one history of the statistics);
+    /// --photons is rounded up to whole chunks of 4096 (default: the scene's
+    /// [simulation] qmc).
     #[arg(long)]
     pub qmc: bool,
     /// No progress line.
@@ -149,12 +150,12 @@ pub fn run_options(args: &RunArgs, scene: &Scene) -> Result<RunOptions> {
     options.estimator = args.estimator.or(options.estimator);
     options.qmc |= args.qmc;
     if options.qmc {
-        // A QMC run traces whole blocks: its last one is never cut short.
-        let block = luxtally::trace::CHUNK_PHOTONS;
+        // A QMC run traces whole chunks, so whole blocks: its last is never cut short.
+        let chunk = luxtally::trace::CHUNK_PHOTONS;
         options.stop.photons = options
             .stop
             .photons
-            .map(|p| p.div_ceil(block).saturating_mul(block));
+            .map(|p| p.div_ceil(chunk).saturating_mul(chunk));
     }
     if let Some(s) = args.report_every {
         if !(s > 0.0 && s.is_finite()) {

@@ -614,7 +614,7 @@ fn bench_accuracy_measures_qmc_runs() {
     assert!(text.contains("next_event estimator, QMC"), "{text}");
     let photons: Vec<u64> = rows.iter().map(|r| r[1] as u64).collect();
     assert!(
-        photons.iter().all(|&p| p % 4096 == 0 && p >= 32 * 4096),
+        photons.iter().all(|&p| p % 4096 == 0 && p >= 32 * 2048),
         "{photons:?}"
     );
 }

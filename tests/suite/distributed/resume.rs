@@ -410,7 +410,7 @@ fn qmc_runs_give_the_same_bits_on_any_threads_shards_and_resumes() {
     assert_eq!(
         numbers_of(&one)["photons_emitted"],
         303_104,
-        "74 whole blocks"
+        "74 whole chunks"
     );
     let two = run("qmc_t2", &[&photons[..], &["--threads", "2"]].concat());
     assert_identical(&one, &two);

@@ -1034,12 +1034,14 @@ fn near_zone_meter_cells_with_few_scores_are_flagged_and_the_reliable_ones_calib
     assert_reliable_cells_calibrated(&z, "near-zone meter, 300 k photons");
 }
 
-/// Photons of the QMC calibrations: 32 blocks of 4096, the fewest whose σ is reported.
-const QMC_PHOTONS: u64 = 32 * 4096;
+/// Photons of the QMC calibrations: 32 blocks of 2048, the fewest whose σ is reported.
+const QMC_PHOTONS: u64 = 32 * 2048;
 
-/// QMC (`run --qmc`) where it is hardest: the blocks' σ at a shadow edge and a cone edge
-/// (next-event connections and sampled direct light), and at grazing incidence (photons
-/// crossing, the emission's QMC directions), each against the analytic cells.
+/// QMC (`run --qmc`) where it is hardest, each against the analytic cells: at grazing
+/// incidence (photons crossing, from the emission's QMC directions; z RMS 0.895 here,
+/// and 0.897 without QMC over 12 seeds: the neighbours' pooling errs high there with or
+/// without it), and at a shadow edge and a cone edge, whose black floors leave the cells
+/// the sampled direct light alone: the blocks' empty photon part must not disturb it.
 #[test]
 fn qmc_is_calibrated_at_edges_and_grazing_incidence() {
     type Exact = fn(usize, usize) -> f64;
@@ -1066,7 +1068,7 @@ fn qmc_is_calibrated_at_edges_and_grazing_incidence() {
             grazing_scene(),
             Estimator::Track,
             grazing_exact,
-            8,
+            16,
             1500,
         ),
     ];
@@ -1084,18 +1086,19 @@ fn qmc_is_calibrated_at_edges_and_grazing_incidence() {
 }
 
 /// The bundled office desk (issue 31's case: 64 × 32 cells, next-event connections from
-/// every diffuse vertex): QMC's σ over 12 seeds against a precise ordinary run, whose
-/// own σ enters each z. The z RMS must lie in [0.85, 1.2], and at the same photons QMC
-/// must report at most 1/√2 of the ordinary run's σ (it measures about 1/1.75 here):
-/// a gain that is real, since the σ is calibrated.
+/// every diffuse vertex): QMC's σ over 16 seeds of 32 blocks against an ordinary run of
+/// 128× the photons, whose own σ (a third of QMC's) enters each z. The z RMS must lie in
+/// [0.85, 1.2] (a QMC σ 20 % low would read 1.22), and at the same photons QMC must
+/// report at most half the ordinary run's σ (it measures about 1/3.7 here): a gain
+/// that is real, since the σ is calibrated.
 #[test]
 fn qmc_on_the_office_desk_is_calibrated_and_gains() {
     let toml = std::fs::read_to_string("scenes/office.toml").unwrap();
-    let reference = seed_run(&toml, 64 * QMC_PHOTONS, 101, (Estimator::NextEvent, false));
+    let reference = seed_run(&toml, 128 * QMC_PHOTONS, 101, (Estimator::NextEvent, false));
     let reference = &reference.receivers["desk"];
     let (mut z, mut qmc_var, mut plain_var) = (Vec::new(), 0.0, 0.0);
-    for seed in 1..=12 {
-        let summary = seed_run(&toml, 2 * QMC_PHOTONS, seed, (Estimator::NextEvent, true));
+    for seed in 1..=16 {
+        let summary = seed_run(&toml, QMC_PHOTONS, seed, (Estimator::NextEvent, true));
         let desk = &summary.receivers["desk"];
         for k in 0..desk.values.len() {
             let sigma = libm::hypot(desk.sigma[k], reference.sigma[k]);
@@ -1103,21 +1106,21 @@ fn qmc_on_the_office_desk_is_calibrated_and_gains() {
             qmc_var += desk.sigma[k] * desk.sigma[k];
         }
     }
-    let plain = seed_run(&toml, 2 * QMC_PHOTONS, 1, (Estimator::NextEvent, false));
+    let plain = seed_run(&toml, QMC_PHOTONS, 1, (Estimator::NextEvent, false));
     plain_var += plain.receivers["desk"]
         .sigma
         .iter()
         .map(|s| s * s)
         .sum::<f64>();
     let r = rms(&z);
-    let gain = (plain_var * 12.0 / qmc_var).sqrt();
+    let gain = (plain_var * 16.0 / qmc_var).sqrt();
     eprintln!(
         "QMC office desk: z RMS {r:.3} over {} cells, σ gain {gain:.2}",
         z.len()
     );
     assert!((0.85..=1.2).contains(&r), "z RMS {r}");
     assert_calibrated_tails(&z, "QMC office desk");
-    assert!(gain >= std::f64::consts::SQRT_2, "σ gain {gain}");
+    assert!(gain >= 2.0, "σ gain {gain}");
 }
 
 /// Below 32 blocks a QMC run's σ is unknown, never the few blocks' estimate (with one
