@@ -179,13 +179,14 @@ impl<'a> Tracer<'a> {
     }
 
     /// With `qmc`, the emission's directions and the receivers' next-event connection
-    /// points are randomised QMC over each chunk ([`qmc_square`]): the direction and
-    /// the first vertex's connections of a photon are two pairs of one Sobol' point,
-    /// stratified together, every later connection a pair of its own. Each chunk is one
-    /// block, whose scores are one history of the cells' moments
-    /// ([`Tallies::set_qmc_blocks`]): only blocks are independent.
-    /// Receivers whose connection points are QMC's (not the luminance meters', drawn in
-    /// their cones) take [`crate::tally::receiver_grid::qmc_connections_for`] of them.
+    /// points are randomised QMC over each block of 2^[`crate::rng::QMC_LOG2_BLOCK`]
+    /// photons ([`qmc_square`]; a chunk holds whole blocks): the direction and the first
+    /// vertex's connections of a photon are two pairs of one Sobol' point, stratified
+    /// together, every later connection a pair of its own. Each block's scores are one
+    /// history of the cells' moments ([`Tallies::set_qmc_blocks`]): only blocks are
+    /// independent. Receivers whose connection points are QMC's (not the luminance
+    /// meters', drawn in their cones) take
+    /// [`crate::tally::receiver_grid::qmc_connections_for`] of them.
     pub fn with_qmc(mut self, qmc: bool) -> Self {
         self.qmc = qmc;
         if qmc {
