@@ -105,13 +105,15 @@ pub fn direct_stream(seed: u64, cell: u64, replicate: u64) -> Pcg32 {
 pub const QMC_LOG2_BLOCK: u32 = 11;
 
 /// What a QMC draw of a photon takes: two dimensions of its joint Sobol' point (the
-/// emission's direction, dimensions 0 and 1, and its first vertex's connection points,
-/// 2 and 3, stratified together), or a pair of its own (every later draw, identified by
-/// `pair`: padded, as pbrt-v4's PaddedSobolSampler pads dimensions).
+/// emission's direction, dimensions 0 and 1, its first vertex's connection points, 2
+/// and 3, and the point of the source it leaves, 4 and 5, stratified together), or a
+/// pair of its own (every later draw, identified by `pair`: padded, as pbrt-v4's
+/// PaddedSobolSampler pads dimensions).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum QmcDraw {
     Emission,
     FirstConnection,
+    Origin,
     Padded(u64),
 }
 
@@ -120,19 +122,40 @@ pub enum QmcDraw {
 /// shuffled and each dimension Owen-scrambled by hashes of (seed, block, pair) (Burley
 /// 2020, "Practical Hash-based Owen Scrambling"). Every point is uniform on [0, 1)²
 /// (so each estimate stays unbiased), and a block's points of a pair are a
-/// (0, 11, 2)-net (the emission's and the padded pairs; the first connection's, Sobol's
-/// dimensions 2 and 3, a (2, 11, 2)-net): a block stratifies what they pick.
+/// (0, 11, 2)-net (the emission's and the padded pairs; the first connection's and the
+/// origin's, Sobol's dimensions 2 and 3 and 4 and 5, (2, 11, 2)-nets): a block stratifies
+/// what they pick.
 #[inline]
 pub fn qmc_square(seed: u64, photon: u64, draw: QmcDraw) -> (f64, f64) {
+    block_square(seed, photon, None, draw)
+}
+
+/// [`qmc_square`]'s point number `rank` of photon `photon`'s block, its index not
+/// shuffled, for draws made by only some of a block's photons (those still travelling
+/// at a depth), numbered in photon order: the first `count` points of a scrambled Sobol'
+/// sequence are evenly spread for any `count`, where the points of a random subset of
+/// the photons' indices would not be. Every point is still uniform on [0, 1)², whatever
+/// picked the rank, so every estimate stays unbiased.
+#[inline]
+pub fn qmc_square_ranked(seed: u64, photon: u64, rank: u32, draw: QmcDraw) -> (f64, f64) {
+    block_square(seed, photon, Some(rank), draw)
+}
+
+#[inline]
+fn block_square(seed: u64, photon: u64, rank: Option<u32>, draw: QmcDraw) -> (f64, f64) {
     let (pair, first_dimension) = match draw {
         QmcDraw::Emission => (u64::MAX, 0),
         QmcDraw::FirstConnection => (u64::MAX, 2),
+        QmcDraw::Origin => (u64::MAX, 4),
         QmcDraw::Padded(pair) => (pair, 0),
     };
     let scramble = mix64(mix64(seed ^ 0x1f83_d9ab_fb41_bd6b) ^ (photon >> QMC_LOG2_BLOCK));
     let scramble = mix64(scramble ^ pair.wrapping_mul(GOLDEN_GAMMA));
     let mask = (1u32 << QMC_LOG2_BLOCK) - 1;
-    let index = nested_uniform_scramble(photon as u32 & mask, scramble as u32) & mask;
+    let index = match rank {
+        Some(rank) => rank & mask,
+        None => nested_uniform_scramble(photon as u32 & mask, scramble as u32) & mask,
+    };
     let coordinate = |d: usize| {
         let x = sobol(index, d);
         let x = nested_uniform_scramble(x, mix64(scramble ^ (d as u64 + 1)) as u32);
@@ -141,14 +164,17 @@ pub fn qmc_square(seed: u64, photon: u64, draw: QmcDraw) -> (f64, f64) {
     (coordinate(first_dimension), coordinate(first_dimension + 1))
 }
 
-/// Sobol's first four dimensions' direction numbers (Joe & Kuo's: the van der Corput
-/// sequence, then the primitive polynomials x + 1, x² + x + 1 and x³ + x + 1 with
-/// m = (1), (1, 3), (1, 3, 1)).
-const SOBOL_DIRECTIONS: [[u32; 32]; 4] = [
+/// Sobol's first six dimensions' direction numbers (Joe & Kuo's new-joe-kuo-6.21201: the
+/// van der Corput sequence, then the primitive polynomials x + 1, x² + x + 1,
+/// x³ + x + 1, x³ + x² + 1 and x⁴ + x + 1 with m = (1), (1, 3), (1, 3, 1), (1, 1, 1),
+/// (1, 1, 3, 3)).
+const SOBOL_DIRECTIONS: [[u32; 32]; 6] = [
     sobol_directions(0, 0, &[]),
     sobol_directions(1, 0, &[1]),
     sobol_directions(2, 1, &[1, 3]),
     sobol_directions(3, 1, &[1, 3, 1]),
+    sobol_directions(3, 2, &[1, 1, 1]),
+    sobol_directions(4, 1, &[1, 1, 3, 3]),
 ];
 
 /// Direction numbers of a dimension of degree `s` polynomial coefficients `a` and initial
@@ -175,7 +201,7 @@ const fn sobol_directions(s: usize, a: u32, m: &[u32]) -> [u32; 32] {
     v
 }
 
-/// Coordinate `dimension` (0–3) of point `index` of the Sobol' sequence, as 32 bits.
+/// Coordinate `dimension` (0–5) of point `index` of the Sobol' sequence, as 32 bits.
 #[inline]
 fn sobol(mut index: u32, dimension: usize) -> u32 {
     let directions = &SOBOL_DIRECTIONS[dimension];
@@ -235,12 +261,13 @@ mod tests {
 
     #[test]
     fn a_qmc_block_is_a_net_and_blocks_are_scrambled_apart() {
-        // Sobol's dimensions 2 and 3 together are a (2, M, 2)-net, each alone a
-        // (0, M, 1)-net (the boxes of one row or one column).
+        // Sobol's dimensions 2 and 3, and 4 and 5, together are (2, M, 2)-nets, each
+        // alone a (0, M, 1)-net (the boxes of one row or one column).
         let draws = [
             (QmcDraw::Emission, 0),
             (QmcDraw::Padded(7), 0),
             (QmcDraw::FirstConnection, 2),
+            (QmcDraw::Origin, 2),
         ];
         for (draw, t) in draws {
             let block = block_points(3, 8192, draw);
@@ -262,6 +289,48 @@ mod tests {
         );
     }
 
+    /// Ranked draws take the block's points in sequence order, so those of the first
+    /// 2^k ranks are a (0, k, 2)-net whatever photons drew them; every block has its own
+    /// scramble, and a rank's point is uniform over blocks.
+    #[test]
+    fn ranked_draws_are_nets_by_prefix_and_uniform_over_blocks() {
+        let draw = QmcDraw::Padded(5);
+        for k in [6, 9, 10] {
+            let prefix: Vec<(u32, u32)> = (0..1u32 << k)
+                .map(|rank| {
+                    // Any photon of the block: only its block counts.
+                    let photon = 8192 + (3 * rank as u64) % 2048;
+                    let (u, v) = qmc_square_ranked(3, photon, rank, draw);
+                    (
+                        (u * (1u64 << M) as f64) as u32,
+                        (v * (1u64 << M) as f64) as u32,
+                    )
+                })
+                .collect();
+            let m = k as usize;
+            let all = (0..=m).all(|a| {
+                let mut count = vec![0u32; 1 << m];
+                for &(u, v) in &prefix {
+                    count[(((u >> (M as usize - a)) << (m - a)) | (v >> (M as usize - m + a)))
+                        as usize] += 1;
+                }
+                count.iter().all(|&c| c == 1)
+            });
+            assert!(all, "the first 2^{k} ranks are not a (0, {k}, 2)-net");
+        }
+        assert_ne!(
+            qmc_square_ranked(3, 0, 17, draw),
+            qmc_square_ranked(3, 2048, 17, draw)
+        );
+        let mut bins = [0u32; 256];
+        for block in 0..16_384u64 {
+            let (u, v) = qmc_square_ranked(11, block << QMC_LOG2_BLOCK, 77, draw);
+            bins[(u * 16.0) as usize * 16 + (v * 16.0) as usize] += 1;
+        }
+        let chi2: f64 = bins.iter().map(|&b| (b as f64 - 64.0).powi(2) / 64.0).sum();
+        assert!(chi2 < 340.0, "χ² = {chi2}");
+    }
+
     #[test]
     fn a_photons_qmc_point_is_uniform_over_blocks() {
         // One photon slot of 16,384 blocks: 16 × 16 bins, each expected 64 times; a
@@ -269,6 +338,7 @@ mod tests {
         for draw in [
             QmcDraw::Emission,
             QmcDraw::FirstConnection,
+            QmcDraw::Origin,
             QmcDraw::Padded(3),
         ] {
             let mut bins = [0u32; 256];

@@ -2,6 +2,7 @@
 //! light per position, emitting the file's candela distribution from its opening.
 
 use super::{
+    EmissionSquares,
     from_point, BoundingSphere, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
 };
 use crate::error::{Error, Result};
@@ -250,14 +251,16 @@ impl Emitter for LuminaireEmitter {
         (p, self.frame * self.photometry.sample_direction(rng))
     }
 
-    /// `direction` picks the photometric grid's cell (its alias table's two numbers).
+    /// `squares.direction` picks the photometric grid's cell and the first proposal in
+    /// it, `squares.origin` the point of the opening.
     fn direction_from_square(&self) -> bool {
         true
     }
 
-    fn sample_emission_from(&self, direction: (f64, f64), rng: &mut Pcg32) -> (DVec3, DVec3) {
-        let p = self.position + self.frame * self.photometry.opening.sample_point_m(rng);
-        let w = self.photometry.sample_direction_from(direction, rng);
+    fn sample_emission_from(&self, squares: EmissionSquares, rng: &mut Pcg32) -> (DVec3, DVec3) {
+        let (a, b) = squares.origin;
+        let p = self.position + self.frame * self.photometry.opening.point_at(a, b);
+        let w = self.photometry.sample_direction_from(squares.direction, rng);
         (p, self.frame * w)
     }
 

@@ -133,6 +133,15 @@ pub fn emission_lanes_one_by_one(
     }
 }
 
+/// A QMC photon's numbers for its emission ([`Emitter::sample_emission_from`]): the
+/// pair that picks its direction ([`crate::rng::QmcDraw::Emission`]) and the pair that
+/// places it on the source ([`crate::rng::QmcDraw::Origin`]), each in [0, 1)².
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EmissionSquares {
+    pub direction: (f64, f64),
+    pub origin: (f64, f64),
+}
+
 /// A light source prepared for sampling, in the scene's local frame.
 pub trait Emitter: Debug + Send + Sync {
     /// The origin and unit direction of one photon, drawn from the source's emission
@@ -155,11 +164,11 @@ pub trait Emitter: Debug + Send + Sync {
         emission_lanes_one_by_one(streams, rngs, o, d, |_, rng| self.sample_emission(rng));
     }
 
-    /// [`Emitter::sample_emission`] with the two numbers of [0, 1)² that pick the
-    /// direction given (a QMC run's, [`crate::rng::QmcDraw::Emission`]; each uniform,
-    /// so the density is the same). Sources whose direction is not a map of two
-    /// numbers draw it as `sample_emission` does.
-    fn sample_emission_from(&self, _direction: (f64, f64), rng: &mut Pcg32) -> (DVec3, DVec3) {
+    /// [`Emitter::sample_emission`] with the numbers of [0, 1)² that pick the direction
+    /// and the point of the source given (a QMC run's; each uniform, so the density is
+    /// the same). Sources whose direction is not a map of two numbers draw it as
+    /// `sample_emission` does.
+    fn sample_emission_from(&self, _squares: EmissionSquares, rng: &mut Pcg32) -> (DVec3, DVec3) {
         self.sample_emission(rng)
     }
 

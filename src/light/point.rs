@@ -1,6 +1,7 @@
 //! Isotropic point source: `type = "point"`, intensity I (cd) in every direction.
 
 use super::{
+    EmissionSquares,
     from_point, single, BoundingSphere, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
 };
 use crate::error::{Error, Result};
@@ -85,7 +86,8 @@ impl Emitter for PointEmitter {
         true
     }
 
-    fn sample_emission_from(&self, (u, v): (f64, f64), _: &mut Pcg32) -> (DVec3, DVec3) {
+    fn sample_emission_from(&self, squares: EmissionSquares, _: &mut Pcg32) -> (DVec3, DVec3) {
+        let (u, v) = squares.direction;
         // As the lanes map theirs, in f32 (rounding below 1: the square is half-open).
         const BELOW_ONE: f32 = 1.0 - f32::EPSILON / 2.0;
         let w = sphere_from_square((u as f32).min(BELOW_ONE), (v as f32).min(BELOW_ONE));

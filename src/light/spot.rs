@@ -2,6 +2,7 @@
 //! smooth fall to zero at `cone_deg`.
 
 use super::{
+    EmissionSquares,
     from_point, single, BoundingSphere, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
 };
 use crate::error::{Error, Result};
@@ -145,8 +146,8 @@ impl Emitter for SpotEmitter {
         true
     }
 
-    fn sample_emission_from(&self, direction: (f64, f64), rng: &mut Pcg32) -> (DVec3, DVec3) {
-        let dir = cone_from_square(self.axis, self.cos_cone, 1.0, direction);
+    fn sample_emission_from(&self, squares: EmissionSquares, rng: &mut Pcg32) -> (DVec3, DVec3) {
+        let dir = cone_from_square(self.axis, self.cos_cone, 1.0, squares.direction);
         if uniform(rng) < spot_profile(dir.dot(self.axis), self.cos_cone, self.cos_falloff) {
             return (self.position, dir);
         }

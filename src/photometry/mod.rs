@@ -398,10 +398,10 @@ impl Photometry {
         self.sampler.sample_direction(&self.grid, cell, rng)
     }
 
-    /// [`Photometry::sample_direction`] with the two numbers that pick the grid cell
-    /// given (a QMC run's).
-    pub fn sample_direction_from(&self, cell: (f64, f64), rng: &mut Pcg32) -> DVec3 {
-        self.sampler.sample_direction(&self.grid, cell, rng)
+    /// [`Photometry::sample_direction`] from a QMC run's point of [0, 1)²: it picks the
+    /// grid cell by inversion and places the first proposal in it.
+    pub fn sample_direction_from(&self, square: (f64, f64), rng: &mut Pcg32) -> DVec3 {
+        (self.sampler).sample_direction_from_square(&self.grid, square, rng)
     }
 
     /// [`Photometry::sample_direction`] as (C, γ) in degrees.

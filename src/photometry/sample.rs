@@ -3,6 +3,13 @@
 //! direction uniform in solid angle inside the cell (φ uniform, cos θ uniform) is kept
 //! with probability I/I_max of the cell, else redrawn in the same cell. The density is
 //! then I(direction)/Φ, with no bias and unit-weight photons.
+//!
+//! A QMC run's point of [0, 1)² picks the cell by inversion instead (a φ column by its
+//! share of the flux, then a cell of the column by its share of the column's, as pbrt's
+//! piecewise-constant 2-D distribution does), and what is left of the two numbers places
+//! the first proposal inside the cell: nearby points stay nearby, so the net's strata
+//! become strata of directions. The alias table scatters neighbouring numbers over
+//! distant cells, which is harmless for random numbers and wasteful for a net.
 
 use super::grid::Grid;
 use crate::sampling::uniform;
@@ -67,12 +74,52 @@ impl Alias {
     }
 }
 
+/// The cells' flux as nested cumulative sums, for picking a cell by inversion: a φ
+/// column, then a cell of that column (θ order).
+#[derive(Clone, Debug, Default, PartialEq)]
+struct Inversion {
+    /// Cumulative flux of the φ columns that emit, with each column's cells.
+    columns: Vec<(f64, Column)>,
+}
+
+#[derive(Clone, Debug, Default, PartialEq)]
+struct Column {
+    /// Cumulative flux of the column's emitting cells (from the column's start) and
+    /// their indices in `cells`.
+    cells: Vec<(f64, u32)>,
+}
+
+/// Where `x` in [0, 1) falls in the cumulative sums `cdf` (non-decreasing, positive last
+/// entry): the entry whose interval holds it and its fraction across that interval, in
+/// [0, 1). Zero-width entries are never chosen.
+#[inline]
+fn invert<T>(cdf: &[(f64, T)], x: f64) -> (usize, f64) {
+    let total = cdf[cdf.len() - 1].0;
+    let y = x * total;
+    let k = cdf.partition_point(|&(c, _)| c <= y).min(cdf.len() - 1);
+    let lo = if k == 0 { 0.0 } else { cdf[k - 1].0 };
+    let fraction = (y - lo) / (cdf[k].0 - lo);
+    (k, fraction.clamp(0.0, 1.0 - f64::EPSILON / 2.0))
+}
+
+impl Inversion {
+    /// The cell of `cells` the point picks, and the point's place inside it.
+    #[inline]
+    fn sample(&self, (u, v): (f64, f64)) -> (usize, (f64, f64)) {
+        let (i, along) = invert(&self.columns, u);
+        let column = &self.columns[i].1.cells;
+        let (j, across) = invert(column, v);
+        (column[j].1 as usize, (along, across))
+    }
+}
+
 /// Samples emission directions of a [`Grid`] in proportion to its interpolant (the
 /// default samples nothing: a placeholder until [`Sampler::new`] has the grid's).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Sampler {
     cells: Vec<Cell>,
     alias: Alias,
+    inversion: Inversion,
 }
 
 impl Sampler {
@@ -80,12 +127,18 @@ impl Sampler {
     pub fn new(grid: &Grid) -> Option<Sampler> {
         let mut cells = Vec::new();
         let mut weights = Vec::new();
+        let mut inversion = Inversion::default();
+        let mut total = 0.0;
         for i in 0..grid.phi_deg.len() - 1 {
+            let (mut column, mut in_column) = (Column::default(), 0.0);
             for j in 0..grid.n_theta() - 1 {
                 let flux = grid.cell_flux_lm(i, j);
                 if flux.is_nan() || flux <= 0.0 {
                     continue;
                 }
+                total += flux;
+                in_column += flux;
+                column.cells.push((in_column, cells.len() as u32));
                 let corner_cd = [
                     grid.at(i, j),
                     grid.at(i, j + 1),
@@ -108,6 +161,9 @@ impl Sampler {
                 });
                 weights.push(flux);
             }
+            if !column.cells.is_empty() {
+                inversion.columns.push((total, column));
+            }
         }
         if cells.is_empty() {
             return None;
@@ -115,6 +171,7 @@ impl Sampler {
         Some(Sampler {
             alias: Alias::new(&weights),
             cells,
+            inversion,
         })
     }
 
@@ -130,9 +187,19 @@ impl Sampler {
     #[inline]
     fn sample_rad_in(&self, cell: (f64, f64), rng: &mut Pcg32) -> (f64, f64, f64, f64) {
         let c = &self.cells[self.alias.sample(cell.0, cell.1)];
+        let first = (uniform(rng), uniform(rng));
+        Self::in_cell(c, first, rng)
+    }
+
+    /// A direction (as [`Sampler::sample_rad`]) in cell `c`: the proposal `first` (φ's
+    /// and cos θ's fractions across the cell), kept with probability I/I_max, then
+    /// proposals from `rng` until one is kept.
+    #[inline]
+    fn in_cell(c: &Cell, first: (f64, f64), rng: &mut Pcg32) -> (f64, f64, f64, f64) {
+        let mut proposal = first;
         loop {
-            let t = uniform(rng);
-            let cos_theta = c.cos0 - uniform(rng) * (c.cos0 - c.cos1);
+            let t = proposal.0;
+            let cos_theta = c.cos0 - proposal.1 * (c.cos0 - c.cos1);
             let theta = libm::acos(cos_theta.clamp(-1.0, 1.0));
             let s = ((theta - c.theta0_rad) / c.dtheta_rad).clamp(0.0, 1.0);
             let [i00, i01, i10, i11] = c.corner_cd;
@@ -143,6 +210,7 @@ impl Sampler {
                 let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
                 return (c.phi0_rad + t * c.dphi_rad, theta, cos_theta, sin_theta);
             }
+            proposal = (uniform(rng), uniform(rng));
         }
     }
 
@@ -150,6 +218,25 @@ impl Sampler {
     #[inline]
     pub fn sample_direction(&self, grid: &Grid, cell: (f64, f64), rng: &mut Pcg32) -> DVec3 {
         let (phi, _, cos_theta, sin_theta) = self.sample_rad_in(cell, rng);
+        Self::direction(grid, phi, cos_theta, sin_theta)
+    }
+
+    /// [`Sampler::sample_direction`] from a QMC point of [0, 1)²: the cell by inversion,
+    /// the first proposal from what is left of the point, later ones from `rng`.
+    #[inline]
+    pub fn sample_direction_from_square(
+        &self,
+        grid: &Grid,
+        square: (f64, f64),
+        rng: &mut Pcg32,
+    ) -> DVec3 {
+        let (cell, first) = self.inversion.sample(square);
+        let (phi, _, cos_theta, sin_theta) = Self::in_cell(&self.cells[cell], first, rng);
+        Self::direction(grid, phi, cos_theta, sin_theta)
+    }
+
+    #[inline]
+    fn direction(grid: &Grid, phi: f64, cos_theta: f64, sin_theta: f64) -> DVec3 {
         let (sp, cp) = libm::sincos(phi);
         let a = &grid.axes;
         (cos_theta * a.pole + sin_theta * (cp * a.zero + sp * a.ninety)).normalize()

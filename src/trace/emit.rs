@@ -2,7 +2,7 @@
 //! frame (`crate::light::Emitter`), their fluxes, and how photons are shared among them.
 //! What each kind emits lives in `crate::light`; nothing here knows the kinds.
 
-use crate::light::{BoundingSphere, Emitter, Incoming};
+use crate::light::{BoundingSphere, EmissionSquares, Emitter, Incoming};
 use crate::rng::{qmc_square, PhotonStreams, QmcDraw};
 use crate::scene::Scene;
 use glam::DVec3;
@@ -19,6 +19,9 @@ pub struct Emitters {
     /// The unit receiver scores are tallied in ([`crate::tally::score_unit`]).
     pub score_unit: f64,
     cdf: Vec<f64>,
+    /// A QMC run's seed ([`Emitters::with_qmc`]): the light of a photon is then picked by
+    /// its emission point's first number.
+    qmc_seed: Option<u64>,
 }
 
 impl Emitters {
@@ -54,23 +57,58 @@ impl Emitters {
             total_flux_lm,
             score_unit: crate::tally::score_unit(total_flux_lm),
             cdf,
+            qmc_seed: None,
         }
+    }
+
+    /// For a QMC run seeded with `seed`: each photon's light is picked by the first number
+    /// of its emission point ([`QmcDraw::Emission`]), by inversion of the flux CDF, and
+    /// what is left of that number goes on to the light's direction. A block's photons
+    /// then share the lights out as evenly as the golden-ratio sequence does, and each
+    /// light's photons keep a stratified set of directions (a light's share of a net).
+    pub fn with_qmc(mut self, seed: Option<u64>) -> Self {
+        self.qmc_seed = seed;
+        self
     }
 
     /// The light that emits photon `index`. Photons are shared in proportion to flux by
     /// a golden-ratio sequence over the flux CDF: deterministic per index, and any run of
-    /// consecutive photons follows the shares closely (no multinomial noise).
+    /// consecutive photons follows the shares closely (no multinomial noise). In a QMC
+    /// run ([`Emitters::with_qmc`]), by the photon's emission point.
     #[inline]
     pub fn light_of(&self, index: u64) -> usize {
         const GOLDEN: f64 = 0.618_033_988_749_894_8;
         if self.cdf.len() < 2 {
             return 0;
         }
+        if let Some(seed) = self.qmc_seed {
+            return self
+                .light_of_square(qmc_square(seed, index, QmcDraw::Emission))
+                .0;
+        }
         let x = (index as f64 * GOLDEN).fract();
         self.cdf
             .iter()
             .position(|&c| x < c)
             .unwrap_or(self.cdf.len().saturating_sub(1))
+    }
+
+    /// Whether every source takes its emission's direction from a QMC run's point
+    /// ([`Emitter::direction_from_square`]): the whole emission is then stratified.
+    pub fn emission_from_square(&self) -> bool {
+        self.emitters.iter().all(|e| e.direction_from_square())
+    }
+
+    /// The light whose share of the flux CDF holds `u`, and the point with `u` rescaled
+    /// across that share (uniform in [0, 1) again).
+    #[inline]
+    fn light_of_square(&self, (u, v): (f64, f64)) -> (usize, (f64, f64)) {
+        let last = self.cdf.len().saturating_sub(1);
+        let k = self.cdf.iter().position(|&c| u < c).unwrap_or(last);
+        let lo = if k == 0 { 0.0 } else { self.cdf[k - 1] };
+        let hi = self.cdf[k];
+        let u = if hi > lo { (u - lo) / (hi - lo) } else { u };
+        (k, (u.clamp(0.0, 1.0 - f64::EPSILON / 2.0), v))
     }
 
     /// Origins and directions (f32, for the ray caster) of the photons `streams.first`,
@@ -92,24 +130,29 @@ impl Emitters {
         });
     }
 
-    /// [`Emitters::sample_lanes`] for a QMC run seeded with `seed`: each photon's
-    /// direction from its joint point's emission pair ([`QmcDraw::Emission`]), photon
-    /// by photon; as `sample_lanes` where no source takes its direction so.
+    /// [`Emitters::sample_lanes`] for a QMC run ([`Emitters::with_qmc`]): each photon's
+    /// light and direction from its joint point's emission pair ([`QmcDraw::Emission`]),
+    /// photon by photon; as `sample_lanes` where no source takes its direction so.
     pub fn sample_lanes_qmc(
         &self,
-        seed: u64,
         streams: PhotonStreams,
         rngs: &mut [Pcg32],
         o: [&mut [f32]; 3],
         d: [&mut [f32]; 3],
     ) {
+        let Some(seed) = self.qmc_seed else {
+            return self.sample_lanes(streams, rngs, o, d);
+        };
         if !self.emitters.iter().any(|e| e.direction_from_square()) {
             return self.sample_lanes(streams, rngs, o, d);
         }
         crate::light::emission_lanes_one_by_one(streams, rngs, o, d, |k, rng| {
             let photon = streams.first + k as u64;
-            let direction = qmc_square(seed, photon, QmcDraw::Emission);
-            self.emitters[self.light_of(photon)].sample_emission_from(direction, rng)
+            let (light, direction) =
+                self.light_of_square(qmc_square(seed, photon, QmcDraw::Emission));
+            let origin = qmc_square(seed, photon, QmcDraw::Origin);
+            let squares = EmissionSquares { direction, origin };
+            self.emitters[light].sample_emission_from(squares, rng)
         });
     }
 
@@ -189,5 +232,45 @@ mod tests {
         let n = 100_000;
         let first = (0..n).filter(|&i| e.light_of(i) == 0).count();
         assert!((first as f64 / n as f64 - 0.25).abs() < 1e-4);
+    }
+
+    /// In a QMC run each block's first numbers are one per 1/2048 of [0, 1), so a light
+    /// with a quarter of the flux gets exactly a quarter of every block; and the light a
+    /// photon is emitted from is `light_of`'s (the portal rules read that).
+    #[test]
+    fn qmc_photons_are_shared_exactly_per_block_and_emitted_from_their_light() {
+        let mut scene = Scene::default();
+        for (x, intensity_cd) in [(-1.0, 1.0), (1.0, 3.0)] {
+            scene.lights.push(crate::scene::SceneLight::new(
+                "",
+                crate::light::Point {
+                    position: DVec3::new(x, 0.0, 0.0),
+                    intensity_cd,
+                },
+            ));
+        }
+        let e = Emitters::new(&scene).with_qmc(Some(7));
+        let block = 1u64 << crate::rng::QMC_LOG2_BLOCK;
+        for b in 0..4 {
+            let first = (b * block..(b + 1) * block)
+                .filter(|&i| e.light_of(i) == 0)
+                .count();
+            assert_eq!(first as u64, block / 4, "block {b}");
+        }
+        let n = 4096;
+        let streams = PhotonStreams::new(7, 8192);
+        let mut rngs = vec![Pcg32::new(0, 0); n];
+        let (mut ox, mut oy, mut oz) = (vec![0f32; n], vec![0f32; n], vec![0f32; n]);
+        let (mut dx, mut dy, mut dz) = (vec![0f32; n], vec![0f32; n], vec![0f32; n]);
+        e.sample_lanes_qmc(
+            streams,
+            &mut rngs,
+            [&mut ox, &mut oy, &mut oz],
+            [&mut dx, &mut dy, &mut dz],
+        );
+        for (k, &x) in ox.iter().enumerate() {
+            let light = e.light_of(8192 + k as u64);
+            assert_eq!(x, if light == 0 { -1.0 } else { 1.0 }, "photon {k}");
+        }
     }
 }

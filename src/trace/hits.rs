@@ -13,6 +13,9 @@ use crate::tally::{deposit_code, ChunkTally};
 use glam::{DVec3, Vec3};
 use rand::RngCore;
 
+/// The offsets in a chunk of a QMC block's photons share the bits above these.
+const QMC_BLOCK_MASK: u32 = (1 << crate::rng::QMC_LOG2_BLOCK) - 1;
+
 /// A photon's hit as pass 2's kernels read it.
 struct Hit<'s> {
     /// Its lane in the batch.
@@ -325,13 +328,18 @@ impl Tracer<'_> {
             let surfacing = &self.surfacings[surface.material as usize];
             let weight = out.survivors.weight(k);
             if !LAMBERT_TRACK && self.any_connects && surfacing.connectable && weight > 0.0 {
+                let rank = (self.qmc && map && hit_bounces > 0).then(|| {
+                    let offsets = &out.survivors.offset[..n];
+                    let block_start = offset & !QMC_BLOCK_MASK;
+                    (k - offsets.partition_point(|&o| o < block_start)) as u32
+                });
                 self.connect(
                     surface.point,
                     normal,
                     -dir,
                     surfacing,
                     (offset, &mut out.survivors.rng[k]),
-                    (first_photon + offset as u64, hit_bounces, !map),
+                    (first_photon + offset as u64, hit_bounces, !map, rank),
                     (flux * weight, !indirect),
                     &mut s.shadow_rays,
                     &mut s.shadow_scores,

@@ -31,7 +31,7 @@ pub mod scatter;
 pub mod shadow;
 
 use crate::accel::{RayBatch, RayCaster};
-use crate::rng::{qmc_square, PhotonStreams, QmcDraw};
+use crate::rng::{qmc_square, qmc_square_ranked, PhotonStreams, QmcDraw};
 use crate::sampling::{cosine_from_square, uniform_f32};
 use crate::scene::{Estimator, Geometry, Scene};
 use crate::surface::Transport;
@@ -189,9 +189,12 @@ impl<'a> Tracer<'a> {
     /// [`crate::tally::receiver_grid::qmc_connections_for`] of them.
     pub fn with_qmc(mut self, qmc: bool) -> Self {
         self.qmc = qmc;
+        self.emitters = self.emitters.with_qmc(qmc.then_some(self.seed));
         if qmc {
+            let stratified = self.emitters.emission_from_square();
             for r in self.receivers.iter_mut().filter(|r| !r.is_luminance()) {
-                r.connections = crate::tally::receiver_grid::qmc_connections_for(r.cell_count());
+                r.connections =
+                    crate::tally::receiver_grid::qmc_connections_for(r.cell_count(), stratified);
             }
         }
         self
@@ -310,7 +313,7 @@ impl<'a> Tracer<'a> {
         let o: [&mut [f32]; 3] = [&mut rays.ox, &mut rays.oy, &mut rays.oz];
         let d: [&mut [f32]; 3] = [&mut rays.dx, &mut rays.dy, &mut rays.dz];
         if self.qmc {
-            (self.emitters).sample_lanes_qmc(self.seed, streams, &mut lanes.rng, o, d);
+            (self.emitters).sample_lanes_qmc(streams, &mut lanes.rng, o, d);
         } else {
             self.emitters.sample_lanes(streams, &mut lanes.rng, o, d);
         }
@@ -532,7 +535,7 @@ impl<'a> Tracer<'a> {
         wo: DVec3,
         surfacing: &Surfacing,
         (offset, rng): (u32, &mut Pcg32),
-        (photon, depth, spawned): (u64, u32, bool),
+        (photon, depth, spawned, rank): (u64, u32, bool, Option<u32>),
         (flux, lit_directly): (f64, bool),
         shadow_rays: &mut RayBatch,
         shadow_scores: &mut Vec<(u32, u32, f64)>,
@@ -557,7 +560,10 @@ impl<'a> Tracer<'a> {
                 self.qmc.then(|| {
                     let pair = ((depth as u64) << 40) ^ ((k as u64) << 20) ^ stratum as u64;
                     let draw = QmcDraw::Padded(pair ^ ((spawned as u64) << 60));
-                    qmc_square(self.seed, photon, draw)
+                    match rank {
+                        Some(rank) => qmc_square_ranked(self.seed, photon, rank, draw),
+                        None => qmc_square(self.seed, photon, draw),
+                    }
                 })
             });
             let Some(c) = r.connect(p.as_dvec3(), stratum, square, rng) else {

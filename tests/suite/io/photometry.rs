@@ -76,11 +76,24 @@ fn assert_sampling_reproduces(
     g_edges: &[f64],
     what: &str,
 ) {
+    assert_draws_reproduce(p, n, (c_edges, g_edges), what, &mut |rng| {
+        p.sample_direction(rng)
+    });
+}
+
+/// [`assert_sampling_reproduces`] for directions drawn by `draw`.
+fn assert_draws_reproduce(
+    p: &Photometry,
+    n: usize,
+    (c_edges, g_edges): (&[f64], &[f64]),
+    what: &str,
+    draw: &mut dyn FnMut(&mut Pcg32) -> DVec3,
+) {
     let (nc, ng) = (c_edges.len() - 1, g_edges.len() - 1);
     let mut counts = vec![0u64; nc * ng];
     let mut rng = Pcg32::new(0x5eed, 7);
     for _ in 0..n {
-        let d = p.sample_direction(&mut rng);
+        let d = draw(&mut rng);
         assert!(
             (d.length() - 1.0).abs() < 1e-9,
             "{what}: not a unit vector: {d}"
@@ -173,6 +186,25 @@ fn examp1_sampled_directions_reproduce_the_table() {
         &steps(0.0, 360.0, 22.5),
         &steps(0.0, 180.0, 2.5),
         "examp1.ies",
+    );
+}
+
+/// A QMC run's directions (`sample_direction_from`: the cell by inversion, the first
+/// proposal from the point) have the same density: fed uniform random points, they
+/// reproduce the table as `sample_direction` does, on a finer binning than the table's.
+#[test]
+fn examp1_directions_from_points_reproduce_the_table() {
+    let p = load("examp1.ies");
+    let (c, g) = (steps(0.0, 360.0, 11.25), steps(0.0, 180.0, 1.25));
+    assert_draws_reproduce(
+        &p,
+        4_000_000,
+        (&c, &g),
+        "examp1.ies by inversion",
+        &mut |rng| {
+            let square = (uniform(rng), uniform(rng));
+            p.sample_direction_from(square, rng)
+        },
     );
 }
 
