@@ -115,11 +115,23 @@ impl Inversion {
 
 /// Samples emission directions of a [`Grid`] in proportion to its interpolant (the
 /// default samples nothing: a placeholder until [`Sampler::new`] has the grid's).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Default, PartialEq)]
 pub struct Sampler {
     cells: Vec<Cell>,
     alias: Alias,
     inversion: Inversion,
+}
+
+/// The cells and the alias table only: the inversion tables are the cells' fluxes again,
+/// and the scene's fingerprint (`crate::scene::fingerprint`, which reads the lights'
+/// `Debug`) should not change with how they are indexed.
+impl std::fmt::Debug for Sampler {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        (f.debug_struct("Sampler"))
+            .field("cells", &self.cells)
+            .field("alias", &self.alias)
+            .finish()
+    }
 }
 
 impl Sampler {
