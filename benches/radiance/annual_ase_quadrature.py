@@ -80,8 +80,8 @@ def main():
     ap.add_argument("--ks", default="1,4,8,16")
     ap.add_argument("--batch", type=int, default=4, help="offsets per rcontrib call")
     ap.add_argument("--trace", type=Path,
-                    help="annual_panes.py's work directory (sky_only.mtx, rad_2pane/dcd_a.mtx): trace the direct light "
-                         "hour by hour against a luxtally run of the scene with every surface and the ground black")
+                    help="annual_panes.py's work directory (sky.mtx, sky_only.mtx, rad_2pane/dcd_a.mtx): trace the direct "
+                         "light hour by hour against a luxtally run of the scene with every surface black")
     ap.add_argument("--json", type=Path)
     a = ap.parse_args()
     work = a.workdir.resolve()
@@ -116,7 +116,7 @@ def main():
     black_dir = work / f"lux_{a.panes}pane_black_sun_mf_0"
     if a.trace and "lux" in stages and not (black_dir / "annual.json").exists():
         bfile = annual_panes.scene_variant(a.scene, a.panes, work / f"scene_{a.panes}pane_black_sun_mf_0.toml",
-                                           {"sun_mf": 0, "ground_reflectance": 0.0})
+                                           {"sun_mf": 0})
         bfile.write_text(re.sub(r"^reflectance = .*$", "reflectance = 0.0", bfile.read_text(), flags=re.M))
         log(f"luxtally annual {bfile.name} (one round)")
         r = annual.run_luxtally(a.luxtally, bfile, black_dir, ["--sda-halfwidth", "0.5"], 2)
@@ -230,9 +230,10 @@ def main():
         res["blinds_hours_vs_finest"] = {f"{K}x{K}": [int((per_k[(K, 'as traced')]['closed'] & ~cl).sum()),
                                                       int((~per_k[(K, 'as traced')]['closed'] & cl).sum())] for K in kk}
     if a.trace and kk and (black_dir / "annual.json").exists():
-        # luxtally's direct light hour by hour: its run with every surface and the ground black gives
-        # the sun's and the sky patches' direct light only; the patches' part is taken out with
-        # Radiance's (DC_d x the sky without the sun or ground), leaving luxtally's direct sun.
+        # luxtally's direct light hour by hour: its run with every surface black gives the sun's,
+        # the sky patches' and the ground's (rho 0.2, a source) direct light only; the patches' and
+        # the ground's part is taken out with Radiance's (DC_d x the sky without the sun, and
+        # gendaymtx's ground row), leaving luxtally's direct sun.
         K = kk[-1]
         d = np.load(work / f"direct_{K}.npy") * pol[None, :]
         hb = (black_dir / "annual_df_grid_hourly.bin").read_bytes()
@@ -241,8 +242,9 @@ def main():
         assert ncell == n and nrec == 8760, (ncell, nrec)
         e = np.frombuffer(hb[len(hb) - body:], dtype="<f4").reshape(8760, 2, n)
         e_occ, s_occ = e[occupied, 0, :].T.astype(np.float64), e[occupied, 1, :].T.astype(np.float64)
-        skyo = annual_panes.read_mtx(a.trace / "sky_only.mtx")[1:, occupied, :]  # patches only (no ground)
-        dcd = annual_panes.read_mtx(a.trace / f"rad_{a.panes}pane" / "dcd_a.mtx")[:, 1:, :]
+        skyo = annual_panes.read_mtx(a.trace / "sky_only.mtx")[:, occupied, :]
+        skyo[0] = annual_panes.read_mtx(a.trace / "sky.mtx")[0, occupied, :]  # the ground row with the sun's light
+        dcd = annual_panes.read_mtx(a.trace / f"rad_{a.panes}pane" / "dcd_a.mtx")
         sky_direct = np.einsum("ijc,jkc->ikc", dcd, skyo) @ W.astype(np.float64)  # [cell, occ]
         lux_sun = e_occ - sky_direct
         over_l, over_r = lux_sun > 1000, d > 1000

@@ -99,11 +99,13 @@ def scene_variant(src: Path, panes, dst: Path, extra=None):
     epw = (src.resolve().parent / scene["annual"]["weather"]).resolve()
     text = re.sub(r'weather = "[^"]*"', f'weather = "{epw}"', text)
     text = text.replace('name = "daylit_office_annual"', f'name = "daylit_office_annual_{panes}pane"')
+    head, tail = text.split("[annual]\n", 1)  # overrides go to the [annual] table (the scene's last)
     for k, v in (extra or {}).items():
-        if re.search(rf"^{k} = ", text, re.M):
-            text = re.sub(rf"^{k} = .*$", f"{k} = {v}", text, flags=re.M)
+        if re.search(rf"^{k} = ", tail, re.M):
+            tail = re.sub(rf"^{k} = .*$", f"{k} = {v}", tail, flags=re.M)
         else:
-            text = text.replace("[annual]\n", f"[annual]\n{k} = {v}\n")
+            tail = f"{k} = {v}\n" + tail
+    text = head + "[annual]\n" + tail
     dst.write_text(text)
     assert tomllib.loads(text)["materials"]["window"]["glazing"] == [0.88] * panes
     return dst
