@@ -79,9 +79,13 @@ def main():
     ap.add_argument("--panes", type=int, default=2, help="panes of the scene (2: as bundled)")
     ap.add_argument("--ks", default="1,4,8,16")
     ap.add_argument("--batch", type=int, default=4, help="offsets per rcontrib call")
+    ap.add_argument("--dj", default="0", help="rcontrib -dj: 0 shadows at the sun's centre; 1 at a random point of its "
+                    "disc per ray (one ray per point: the K x K points then also sample the disc)")
     ap.add_argument("--trace", type=Path,
                     help="annual_panes.py's work directory (sky.mtx, sky_only.mtx, rad_2pane/dcd_a.mtx): trace the direct "
                          "light hour by hour against a luxtally run of the scene with every surface black")
+    ap.add_argument("--penumbra", type=int, default=0,
+                    help="with --trace: C > 0 re-traces the records that differ most with rcontrib -dj 1 -c C (the sun's disc)")
     ap.add_argument("--json", type=Path)
     a = ap.parse_args()
     work = a.workdir.resolve()
@@ -103,6 +107,7 @@ def main():
     runs_file = work / "runs.json"
     runs = json.loads(runs_file.read_text()) if runs_file.exists() else {}
     lux_dir = work / f"lux_{a.panes}pane_sun_mf_0"
+    dj_tag = "" if a.dj == "0" else f"_dj{a.dj}"
 
     if "lux" in stages and not (lux_dir / "annual.json").exists():
         log(f"luxtally annual {scene_file.name} (one round)")
@@ -151,10 +156,10 @@ def main():
         annual.run([tools["oconv"], "office.rad", "suns_lux.rad"], work, stdout_path=work / "suns_lux.oct")
         cols = np.array([col_of_rec[k] for k, _, _ in suns])
         du, dv = 3.0 / nu, 5.0 / nv
-        cmd = [tools["rcontrib"], "-V+", "-I+", "-ab", "0", "-dj", "0", "-dt", "0", "-dc", "1", "-dr", "0", "-n", "2",
+        cmd = [tools["rcontrib"], "-V+", "-I+", "-ab", "0", "-dj", a.dj, "-dt", "0", "-dc", "1", "-dr", "0", "-n", "2",
                "-faf", "-M", "suns_lux.mod", "suns_lux.oct"]
         for K in ks:
-            f = work / f"direct_{K}.npy"
+            f = work / f"direct_{K}{dj_tag}.npy"
             if f.exists():
                 continue
             offs = [((p + 0.5) / K - 0.5, (q + 0.5) / K - 0.5) for q in range(K) for p in range(K)]
@@ -171,7 +176,7 @@ def main():
                 acc[:, cols] += lx
             (work / "cds_tmp.mtx").unlink()
             np.save(f, (acc / len(offs)).astype(np.float32))
-            runs[f"rcontrib {K}x{K}"] = dict(cmd=[Path(cmd[0]).name, *cmd[1:]], points=n * K * K, wall_s=t,
+            runs[f"rcontrib {K}x{K}{dj_tag}"] = dict(cmd=[Path(cmd[0]).name, *cmd[1:]], points=n * K * K, wall_s=t,
                                             load_before=l0, load_after=annual.load_avg())
             runs_file.write_text(json.dumps(runs, indent=1))
             log(f"rcontrib direct sun, {K}x{K} points per cell: {t:.1f} s (load before {l0})")
@@ -183,26 +188,25 @@ def main():
     lux_h = np.array([float(c["ase_hours"]) for c in cells])
     lux_lo = np.array([float(c["ase_hours_low"]) for c in cells])
     lux_hi = np.array([float(c["ase_hours_high"]) for c in cells])
-    # per-hour factor: luxtally's polarised / Radiance's unpolarised stacking at the sun's incidence
+    # per-hour factor: luxtally's glazing over Radiance's for a light source's ray, at the sun's incidence
     glz = [float(x) for x in scene["materials"]["window"]["glazing"]]
     tns = [daylight.tn_from_Tn(t) for t in glz]
     pol = np.ones(n_occ)
     for k, v, _ in suns:
-        cos_i = -v[1]  # the window faces -y (south)
-        if cos_i > 1e-9:
-            tp, tu = daylight.stack_T(cos_i, tns)
-            pol[col_of_rec[k]] = tp / tu
+        pol[col_of_rec[k]] = annual_panes.glazing_factor(-v[1], tns)  # the window faces -y (south)
     res = dict(luxtally=dict(ase=js["ase_1000_250"], blinds=js["blinds_closed_hours_fraction"],
                              sda=js["sda_300_50"], mean_ase_hours=float(lux_h.mean())),
                occupied_records=n_occ, suns=len(suns), runs=runs, radiance={})
     lux_ase_cells = lux_h > 250
     per_k = {}
-    for K in ks:
-        f = work / f"direct_{K}.npy"
+    for K, djt in [(K, t) for K in ks for t in ("", "_dj1")]:
+        f = work / f"direct_{K}{djt}.npy"
         if not f.exists():
             continue
         d = np.load(f)
-        for tag, dd in (("as traced", d), ("× polarised/unpolarised per hour", d * pol[None, :])):
+        for tag, dd in (("as traced", d), ("× luxtally's / Radiance's glazing per hour", d * pol[None, :])):
+            if djt:
+                tag = f"-dj 1, {tag}"
             m = metrics(dd, n)
             ase_cells = m["ase_hours"] > 250
             inside = (m["ase_hours"] >= lux_lo - 1e-9) & (m["ase_hours"] <= lux_hi + 1e-9)
@@ -215,7 +219,10 @@ def main():
                 cells_verdict_differs=[dict(cell=int(i), row=int(i // nu), col=int(i % nu), lux=float(lux_h[i]),
                                             lux_lo=float(lux_lo[i]), lux_hi=float(lux_hi[i]),
                                             rad=int(m["ase_hours"][i])) for i in diff])
-            per_k[(K, tag)] = m
+            if not djt:
+                per_k[(K, tag)] = m
+        if djt:
+            continue
         log(f"K={K}: ASE {res['radiance'][f'{K}x{K}, as traced']['ase']:.4f}, blinds "
             f"{res['radiance'][f'{K}x{K}, as traced']['blinds']:.4f}")
     # per cell: the ASE hours' convergence in K (largest K as the reference)
@@ -236,6 +243,10 @@ def main():
         # gendaymtx's ground row), leaving luxtally's direct sun.
         K = kk[-1]
         d = np.load(work / f"direct_{K}.npy") * pol[None, :]
+        direct_label = f"{K}x{K} -dj 0"
+        if (work / f"direct_{K}_dj1.npy").exists():  # the sun's disc sampled
+            d = np.load(work / f"direct_{K}_dj1.npy") * pol[None, :]
+            direct_label = f"{K}x{K} -dj 1"
         hb = (black_dir / "annual_df_grid_hourly.bin").read_bytes()
         body = 8 * n * 8760
         ncell, nrec = np.frombuffer(hb[len(hb) - body - 8:len(hb) - body], dtype="<u4")
@@ -250,7 +261,7 @@ def main():
         over_l, over_r = lux_sun > 1000, d > 1000
         closed_l, closed_r = over_l.sum(axis=0) > 0.02 * n, over_r.sum(axis=0) > 0.02 * n
         lit = d > 0
-        tr = dict(K=K, lux_ase_hours_mean=float(over_l.sum(axis=1).mean()), rad_ase_hours_mean=float(over_r.sum(axis=1).mean()),
+        tr = dict(K=K, direct=direct_label, lux_ase_hours_mean=float(over_l.sum(axis=1).mean()), rad_ase_hours_mean=float(over_r.sum(axis=1).mean()),
                   lux_ase=float((over_l.sum(axis=1) > 250).mean()), rad_ase=float((over_r.sum(axis=1) > 250).mean()),
                   lux_blinds_hours=int(closed_l.sum()), rad_blinds_hours=int(closed_r.sum()),
                   blinds_only_lux=int((closed_l & ~closed_r).sum()), blinds_only_rad=int((~closed_l & closed_r).sum()),
@@ -276,6 +287,54 @@ def main():
                                              stamp=stamps[occupied[j]][2], lux_cells=int(over_l[:, j].sum()),
                                              rad_cells=int(over_r[:, j].sum()))
                                         for j in np.nonzero(closed_l != closed_r)[0]]
+        # The sun's disc: luxtally samples the 0.533 deg disc, rcontrib -dj 0 shadows at its centre.
+        # For the blinds hours that differ and the records of the cell-hours that differ most, the
+        # direct sun again with -dj 1 (points over the disc) and -c C samples per point, 8 x 8 per cell.
+        if a.penumbra:
+            recs = sorted({h["record"] for h in tr["blinds_hours_differing"]}
+                          | {c["record"] for c in sorted(tr["differing_cell_hours"],
+                                                          key=lambda c: -abs(c["lux_direct"] - c["rad_direct"]))[:40]})
+            sel = [x for x in suns if x[0] in set(recs)]
+            binpath, raypath, _ = compare.setup_radiance(a.venv)
+            os.environ["RAYPATH"] = "." + os.pathsep + raypath
+            tools = annual.tools_in(binpath)
+            with open(work / "suns_sel.rad", "w") as fr, open(work / "suns_sel.mod", "w") as fm:
+                for k, v, edn in sel:
+                    L = edn / (179.0 * SUN_SA)
+                    fr.write(f"\nvoid light lsolar{k}\n0\n0\n3 {L:.6e} {L:.6e} {L:.6e}\n\nlsolar{k} source lsun{k}\n0\n0\n"
+                             f"4 {v[0]:.7f} {v[1]:.7f} {v[2]:.7f} 0.5330\n")
+                    fm.write(f"lsolar{k}\n")
+            annual.run([tools["oconv"], "office.rad", "suns_sel.rad"], work, stdout_path=work / "suns_sel.oct")
+            Kp, C = 8, a.penumbra
+            offs = [((p_ + 0.5) / Kp - 0.5, (q + 0.5) / Kp - 0.5) for q in range(Kp) for p_ in range(Kp)]
+            txt = "".join(f"{x + fu * 3.0 / nu:.5f} {y + fv * 5.0 / nv:.5f} {z:.4f} 0 0 1\n"
+                          for fu, fv in offs for x, y, z in pts).encode()
+            out_p = {}
+            for dj in ("0", "1"):
+                cmd = [tools["rcontrib"], "-V+", "-I+", "-ab", "0", "-dj", dj, "-dt", "0", "-dc", "1", "-dr", "0", "-n", "2",
+                       "-faf", "-c", str(C if dj == "1" else 1), "-M", "suns_sel.mod", "suns_sel.oct"]
+                l0 = annual.load_avg()
+                # -c C averages C input rays per record: each point given C times (-dj 1 jitters each over the disc)
+                src = txt if dj == "0" else b"".join(line + b"\n" for line in txt.split(b"\n")[:-1] for _ in range(C))
+                _, dt, _ = annual.run(cmd, work, stdin=src, stdout_path=work / "sel_tmp.mtx")
+                m = annual_panes.read_mtx(work / "sel_tmp.mtx").astype(np.float32) @ W
+                out_p[dj] = m.reshape(len(offs), n, len(sel)).mean(axis=0)  # [cell, sun] (rcontrib -c averages)
+                runs[f"rcontrib penumbra -dj {dj}"] = dict(cmd=[Path(cmd[0]).name, *cmd[1:]], points=n * Kp * Kp,
+                                                          suns=len(sel), wall_s=dt, load_before=l0)
+            (work / "sel_tmp.mtx").unlink()
+            rows = []
+            for q, (k, _, _) in enumerate(sel):
+                j = col_of_rec[k]
+                fj = pol[j]
+                r0, r1 = out_p["0"][:, q] * fj, out_p["1"][:, q] * fj
+                rows.append(dict(record=int(k), month=stamps[k][0], day=stamps[k][1], stamp=stamps[k][2],
+                                 altitude=float(hours[k]["sun_altitude_deg"]), azimuth=float(hours[k]["sun_azimuth_deg"]),
+                                 lux_cells=int(over_l[:, j].sum()), rad_dj0_cells=int((r0 > 1000).sum()),
+                                 rad_dj1_cells=int((r1 > 1000).sum()), lux_sum=float(lux_sun[:, j].sum()),
+                                 rad_dj0_sum=float(r0.sum()), rad_dj1_sum=float(r1.sum()),
+                                 cells_disagree_dj0=int(((r0 > 1000) != over_l[:, j]).sum()),
+                                 cells_disagree_dj1=int(((r1 > 1000) != over_l[:, j]).sum())))
+            tr["penumbra"] = dict(samples_per_point=C, points_per_cell=Kp * Kp, records=rows)
         res["trace"] = tr
         log(f"trace: {json.dumps({k: v for k, v in tr.items() if not isinstance(v, list)})}")
     out = a.json or work / "ase_results.json"

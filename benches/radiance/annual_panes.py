@@ -111,6 +111,21 @@ def scene_variant(src: Path, panes, dst: Path, extra=None):
     return dst
 
 
+def glazing_factor(cos_i, tns):
+    """luxtally's transmittance of the panes (per polarisation, their inter-reflections
+    summed: daylight.stack_T) over what Radiance's `glass` polygons give a ray from a light
+    source (its shadow ray through each pane in turn, unpolarised, no reflections between
+    the panes: the product of the panes' transmittances; checked with rtrace -ab 0 through
+    one and two panes). 1 for a single pane."""
+    if cos_i <= 1e-9:
+        return 1.0
+    prod = 1.0
+    for tn in tns:
+        (ts, _), (tp, _) = daylight.pane_TR(cos_i, tn)
+        prod *= (ts + tp) / 2
+    return daylight.stack_T(cos_i, tns)[0] / prod
+
+
 def rows_sigma(a, b, nu, nv):
     m, s, noise = annual.rows_sigma(list(a), list(b), nu, nv)
     return np.array(m), np.array(s), noise
@@ -309,8 +324,8 @@ def main():
         for label, lsig in (("σ_lux pooled from the two seeds", ls), ("σ_lux = luxtally's mean_sigma_lx (÷√2)", own)):
             c = annual.compare_cells(list(lm), list(lsig), list(rm), list(rs))
             cmp[label] = c
-        # The direct sun through luxtally's polarised stacking (exact per hour: the sun's
-        # incidence on the window), everything else as Radiance traced it.
+        # The direct sun through luxtally's glazing model (exact per hour at the sun's incidence
+        # on the window: glazing_factor), everything else as Radiance traced it.
         fh = wd / f"cds_hourly_{a.sub}x{a.sub}.npy"
         pol_term = None
         if fh.exists():
@@ -321,8 +336,7 @@ def main():
             for k in np.load(wd / "cds_records.npy"):
                 al, az = math.radians(float(hrs[k]["sun_altitude_deg"])), math.radians(float(hrs[k]["sun_azimuth_deg"]))
                 cos_i = -math.cos(al) * math.cos(az)  # -(direction . y): the window faces -y
-                tp, tu = daylight.stack_T(cos_i, tns) if cos_i > 1e-9 else (1.0, 1.0)
-                fac.append(tp / tu)
+                fac.append(glazing_factor(cos_i, tns))
             fac = np.array(fac)
             rm_pol = rm + ch @ (fac - 1) / n_occ
             rad[p]["mean_pol"] = rm_pol
@@ -330,7 +344,7 @@ def main():
             pol_term = dict(grid=float(rm_pol.mean() / rm.mean()), direct_sun_share_of_mean=direct_share,
                             direct_sun_factor=float((ch @ fac).sum() / ch.sum()))
             for label, lsig in (("σ_lux pooled from the two seeds", ls), ("σ_lux = luxtally's mean_sigma_lx (÷√2)", own)):
-                cmp[f"{label}; Radiance's direct sun × luxtally's polarised stacking"] = annual.compare_cells(
+                cmp[f"{label}; Radiance's direct sun × luxtally's glazing / Radiance's"] = annual.compare_cells(
                     list(lm), list(lsig), list(rm_pol), list(rs))
         res["scenes"][p] = dict(
             direct_sun_polarisation=pol_term,
@@ -353,7 +367,7 @@ def main():
                 row[f"rad {p} {k}"] = float(v[idx].mean())
             row[f"ratio {p}"] = row[f"lux {p}"] / float(rad[p]["mean"][idx].mean())
             if "mean_pol" in rad[p] and p > 1:
-                row[f"ratio {p}, rad direct sun × pol."] = row[f"lux {p}"] / float(rad[p]["mean_pol"][idx].mean())
+                row[f"ratio {p}, rad direct sun × glazing f."] = row[f"lux {p}"] / float(rad[p]["mean_pol"][idx].mean())
         if len(panes) == 2:
             row["ratio 1 / ratio 2"] = row["ratio 1"] / row["ratio 2"]
         bands.append(row)
@@ -415,7 +429,7 @@ def markdown(r, panes):
         o.append(f"Radiance ladder, {p} pane(s): " + ", ".join(f"{k}: {v:.1f} lx" for k, v in r["scenes"][p]["ladder"].items()))
         if r["scenes"][p].get("direct_sun_polarisation"):
             d = r["scenes"][p]["direct_sun_polarisation"]
-            o.append(f"  direct sun (4 × 4 per cell) share of Radiance's mean {d['direct_sun_share_of_mean']:.1%}; its polarised/unpolarised "
+            o.append(f"  direct sun (4 × 4 per cell) share of Radiance's mean {d['direct_sun_share_of_mean']:.1%}; luxtally's/Radiance's glazing "
                      f"factor {d['direct_sun_factor']:.4f}; Radiance's mean with it × {d['grid']:.4f}")
     if "double_ratio" in r:
         d = r["double_ratio"]
