@@ -11,7 +11,8 @@ per polarisation and average the two: Radiance's glass.c does so within one surf
 the polarisation term of ANNUAL_RESULTS.md's budget (estimated × 1.0184 for two panes)
 vanishes, and luxtally / Radiance on one pane over the same on two should be ≈ 1/1.0184.
 
-Stages (`--stages lux,rad,report`, default all; each skips what its outputs already hold):
+Stages (`--stages lux,rad,report`, default all; each skips what its outputs already hold;
+`glass` checks Radiance's two `glass` polygons against the pane formulas with rtrace):
 
 lux    `luxtally annual SCENE --out DIR --threads 2 --photons N --sda-halfwidth 0.5
        --seed S` for both scenes and seeds 1, 2 (one round of N photons, default 80 M):
@@ -124,6 +125,49 @@ def glazing_factor(cos_i, tns):
         (ts, _), (tp, _) = daylight.pane_TR(cos_i, tn)
         prod *= (ts + tp) / 2
     return daylight.stack_T(cos_i, tns)[0] / prod
+
+
+def check_glass(tools, tns, workdir, angles=(0, 20, 40, 55, 65, 70)):
+    """Radiance's `glass` polygons (12 mm apart) against the pane formulas, by rtrace -ab 0:
+    a view ray through them at a glow of radiance 1 (what backward rays see), and the
+    illuminance from a distant 0.533 deg light of radiance 1000 at a point behind them, over
+    the same without glass (what a light source's shadow ray gets). Per incidence angle:
+    rtrace's two ratios, the product of the panes' unpolarised T, the unpolarised adding
+    formula (the panes' inter-reflections summed) and luxtally's polarised stack."""
+    import subprocess
+    out = []
+    for th in angles:
+        t = math.radians(th)
+        d = (0.0, -math.cos(t), math.sin(t))
+        row = dict(angle=th)
+        for kind in ("view", "source"):
+            vals = []
+            for npn in (0, len(tns)):
+                txt = ["void glass g 0 0 3 " + " ".join([f"{tns[0]:.9f}"] * 3)] if npn else []
+                for k in range(npn):
+                    y = -0.012 * k
+                    txt.append(f"g polygon p{k} 0 0 12 -50 {y} -50  50 {y} -50  50 {y} 50  -50 {y} 50")
+                if kind == "view":
+                    txt += ["void glow gl 0 0 4 1 1 1 0", "gl polygon big 0 0 12 -500 -100 500  500 -100 500  500 -100 -500  -500 -100 -500"]
+                    ray, opts = f"0 1 0 {d[0]} {d[1]} {d[2]}\n", ["-ov"]
+                else:
+                    txt += ["void light sunl 0 0 3 1000 1000 1000", f"sunl source sun 0 0 4 {d[0]} {d[1]} {d[2]} 0.533"]
+                    ray, opts = f"0 1 0 {d[0]} {d[1]} {d[2]}\n", ["-I+", "-dj", "0", "-dc", "1", "-dt", "0"]
+                (workdir / "glass_check.rad").write_text("\n".join(txt) + "\n")
+                annual.run([tools["oconv"], "glass_check.rad"], workdir, stdout_path=workdir / "glass_check.oct")
+                r = subprocess.run([tools["rtrace"], "-h", "-ab", "0", "-lw", "1e-9", "-lr", "-10", *opts, "glass_check.oct"],
+                                   input=ray.encode(), capture_output=True, cwd=workdir)
+                vals.append(float(r.stdout.split()[0]))
+            row[kind] = vals[1] / vals[0]
+        c = math.cos(t)
+        per = [daylight.pane_TR(c, tn) for tn in tns]
+        prod = 1.0
+        for (ts, _), (tp, _) in per:
+            prod *= (ts + tp) / 2
+        pol, unpol = daylight.stack_T(c, tns)
+        row.update(product=prod, adding_unpolarised=unpol, luxtally_polarised=pol)
+        out.append(row)
+    return out
 
 
 def rows_sigma(a, b, nu, nv):
@@ -282,6 +326,16 @@ def main():
                 save_runs()
                 log(f"{p} pane(s): rcontrib C_ds on {K}x{K} points per cell: {t:.1f} s")
         save_runs()
+
+    if "glass" in stages:
+        rows = check_glass(tools, [daylight.tn_from_Tn(0.88)] * 2, work)
+        runs["glass check (2 panes)"] = rows
+        save_runs()
+        print("| incidence | rtrace view ray (glow) | rtrace light source (shadow ray) | Π pane T | adding, unpolarised | luxtally, polarised |")
+        print("|---|---|---|---|---|---|")
+        for r in rows:
+            print(f"| {r['angle']}° | {r['view']:.6f} | {r['source']:.6f} | {r['product']:.6f} | {r['adding_unpolarised']:.6f} | "
+                  f"{r['luxtally_polarised']:.6f} |")
 
     if "report" not in stages:
         return
