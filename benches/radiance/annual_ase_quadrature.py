@@ -61,6 +61,11 @@ W = np.array([compare.LM_PER_W * x for x in compare.PHOTOMETRIC], dtype=np.float
 SUN_SA = math.pi * math.radians(0.533 / 2) ** 2
 
 
+def hourly_lx(dc, sky):
+    """dc [cell, patch, 3] times sky [patch, record, 3]: lx [cell, record] (a matmul per channel)."""
+    return sum(float(W[c]) * (dc[:, :, c] @ sky[:, :, c]) for c in range(3))
+
+
 def metrics(direct, n_cells, share=0.02, ase_lx=1000.0, ase_hours=250):
     over = direct > ase_lx  # [cell, record]
     hours = over.sum(axis=1)
@@ -86,6 +91,9 @@ def main():
                          "light hour by hour against a luxtally run of the scene with every surface black")
     ap.add_argument("--penumbra", type=int, default=0,
                     help="with --trace: C > 0 re-traces the records that differ most with rcontrib -dj 1 -c C (the sun's disc)")
+    ap.add_argument("--sda", type=Path,
+                    help="annual_panes.py's work directory: sDA300/50 % with the blinds from its 5-phase (-ab 16 runs a, "
+                         "b; the direct sun = this script's finest K, -dj 1 if present, x the glazing factor)")
     ap.add_argument("--json", type=Path)
     a = ap.parse_args()
     work = a.workdir.resolve()
@@ -256,7 +264,7 @@ def main():
         skyo = annual_panes.read_mtx(a.trace / "sky_only.mtx")[:, occupied, :]
         skyo[0] = annual_panes.read_mtx(a.trace / "sky.mtx")[0, occupied, :]  # the ground row with the sun's light
         dcd = annual_panes.read_mtx(a.trace / f"rad_{a.panes}pane" / "dcd_a.mtx")
-        sky_direct = np.einsum("ijc,jkc->ikc", dcd, skyo) @ W.astype(np.float64)  # [cell, occ]
+        sky_direct = hourly_lx(dcd, skyo)  # [cell, occ]
         lux_sun = e_occ - sky_direct
         over_l, over_r = lux_sun > 1000, d > 1000
         closed_l, closed_r = over_l.sum(axis=0) > 0.02 * n, over_r.sum(axis=0) > 0.02 * n
@@ -337,6 +345,37 @@ def main():
             tr["penumbra"] = dict(samples_per_point=C, points_per_cell=Kp * Kp, records=rows)
         res["trace"] = tr
         log(f"trace: {json.dumps({k: v for k, v in tr.items() if not isinstance(v, list)})}")
+    if a.sda and kk:
+        K = kk[-1]
+        fd = work / f"direct_{K}_dj1.npy"
+        d = np.load(fd if fd.exists() else work / f"direct_{K}.npy").astype(np.float64) * pol[None, :]
+        sky = annual_panes.read_mtx(a.sda / "sky.mtx")[:, occupied, :]
+        sun2 = annual_panes.read_mtx(a.sda / "sun_m2.mtx")[:, occupied, :]
+        closed = (d > 1000).sum(axis=0) > 0.02 * n
+        shade = float(ann.get("shade_transmittance", 0.05))
+        out_s = dict(direct=fd.name if fd.exists() else f"direct_{K}.npy", blinds=float(closed.mean()), runs={})
+        for tag in ("a", "b"):
+            dc = sorted((a.sda / f"rad_{a.panes}pane").glob(f"dc_ab16_*_{tag}.mtx"))[0]
+            dcm = annual_panes.read_mtx(dc)
+            dcd = annual_panes.read_mtx(a.sda / f"rad_{a.panes}pane" / f"dcd_{tag}.mtx")
+            e = hourly_lx(dcm, sky) - hourly_lx(dcd, sun2) + d  # [cell, occ]
+            da_b = ((np.where(closed[None, :], e * shade, e)) >= 300).sum(axis=1) / n_occ
+            da = (e >= 300).sum(axis=1) / n_occ
+            out_s["runs"][tag] = dict(dc=dc.name, mean=float(e.mean()), sda_blinds=float((da_b >= 0.5).mean()),
+                                      sda_no_blinds=float((da >= 0.5).mean()), da300_blinds=da_b.tolist())
+            log(f"sDA with blinds, Radiance 5-phase {dc.name}: {(da_b >= 0.5).mean():.4f} (mean {e.mean():.1f} lx)")
+        # per cell: inside luxtally's DA300-with-blinds interval?
+        lda = np.array([float(c["da300_blinds"]) for c in cells])
+        llo = np.array([float(c["da300_blinds_low"]) for c in cells])
+        lhi = np.array([float(c["da300_blinds_high"]) for c in cells])
+        for tag, r_ in out_s["runs"].items():
+            dab = np.array(r_["da300_blinds"])
+            r_["cells_inside_lux_da_interval"] = float(((dab >= llo - 1e-9) & (dab <= lhi + 1e-9)).mean())
+            r_["mean_da_diff_lux_minus_rad"] = float((lda - dab).mean())
+            del r_["da300_blinds"]
+        out_s["luxtally"] = dict(sda=js["sda_300_50"], run=str(lux_dir.name))
+        res["sda"] = out_s
+        log(f"sDA: {json.dumps(out_s)}")
     out = a.json or work / "ase_results.json"
     out.write_text(json.dumps(res, indent=1))
     print(markdown(res))
