@@ -400,7 +400,17 @@ def main():
             for label, lsig in (("σ_lux pooled from the two seeds", ls), ("σ_lux = luxtally's mean_sigma_lx (÷√2)", own)):
                 cmp[f"{label}; Radiance's direct sun × luxtally's glazing / Radiance's"] = annual.compare_cells(
                     list(lm), list(lsig), list(rm_pol), list(rs))
+        # Radiance's diffuse part (everything but C_ds, which is already a 4 x 4 cell average) at the
+        # cell centres moved to cell averages by daylight.centre_to_average (its curvature term)
+        cds_mean = np.load(wd / f"cds_sum_{a.sub}x{a.sub}.npy") / n_occ
+        c2a = np.array(daylight.centre_to_average(list(rm - cds_mean), nu, nv))
+        variants = {"Radiance's diffuse part at cell averages": rm + c2a}
+        if "mean_pol" in rad[p]:
+            variants["both"] = rad[p]["mean_pol"] + c2a
+        for vk, vm in variants.items():
+            cmp[f"σ_lux pooled from the two seeds; {vk}"] = annual.compare_cells(list(lm), list(ls), list(vm), list(rs))
         res["scenes"][p] = dict(
+            centre_to_average_grid=float((rm + c2a).mean() / rm.mean()),
             direct_sun_polarisation=pol_term,
             lux_grid_mean=float(lm.mean()), lux_seed_means=[float(x.mean()) for x in m],
             lux_observed_noise_per_run=lnoise,
