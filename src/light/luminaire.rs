@@ -2,8 +2,7 @@
 //! light per position, emitting the file's candela distribution from its opening.
 
 use super::{
-    EmissionSquares,
-    from_point, BoundingSphere, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
+    from_point, BoundingSphere, EmissionSquares, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
 };
 use crate::error::{Error, Result};
 use crate::input::{amount, direction, required, vec3, Coords};

@@ -1,8 +1,7 @@
 //! Isotropic point source: `type = "point"`, intensity I (cd) in every direction.
 
 use super::{
-    EmissionSquares,
-    from_point, single, BoundingSphere, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
+    from_point, single, BoundingSphere, EmissionSquares, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
 };
 use crate::error::{Error, Result};
 use crate::input::{amount, required, vec3, Coords};

@@ -123,8 +123,8 @@ pub struct Sampler {
 }
 
 /// The cells and the alias table only: the inversion tables are the cells' fluxes again,
-/// and the scene's fingerprint (which reads the lights'
-/// `Debug`) should not change with how they are indexed.
+/// and the scene's fingerprint (which reads the lights' `Debug`) should not change with
+/// how they are indexed.
 impl std::fmt::Debug for Sampler {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         (f.debug_struct("Sampler"))
