@@ -2,7 +2,8 @@
 //! light per position, emitting the file's candela distribution from its opening.
 
 use super::{
-    from_point, BoundingSphere, EmissionSquares, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
+    from_point, BoundingSphere, EmissionSquares, Emitter, Incoming, Labelled, Light, LightFile,
+    LoadContext,
 };
 use crate::error::{Error, Result};
 use crate::input::{amount, direction, required, vec3, Coords};

@@ -1,7 +1,8 @@
 //! Isotropic point source: `type = "point"`, intensity I (cd) in every direction.
 
 use super::{
-    from_point, single, BoundingSphere, EmissionSquares, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
+    from_point, single, BoundingSphere, EmissionSquares, Emitter, Incoming, Labelled, Light,
+    LightFile, LoadContext,
 };
 use crate::error::{Error, Result};
 use crate::input::{amount, required, vec3, Coords};

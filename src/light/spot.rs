@@ -2,7 +2,8 @@
 //! smooth fall to zero at `cone_deg`.
 
 use super::{
-    from_point, single, BoundingSphere, EmissionSquares, Emitter, Incoming, Labelled, Light, LightFile, LoadContext,
+    from_point, single, BoundingSphere, EmissionSquares, Emitter, Incoming, Labelled, Light,
+    LightFile, LoadContext,
 };
 use crate::error::{Error, Result};
 use crate::input::{amount, direction, required, vec3, Coords};
