@@ -13,8 +13,14 @@ use crate::tally::{deposit_code, ChunkTally};
 use glam::{DVec3, Vec3};
 use rand::RngCore;
 
-/// The offsets in a chunk of a QMC block's photons share the bits above these.
-const QMC_BLOCK_MASK: u32 = (1 << crate::rng::QMC_LOG2_BLOCK) - 1;
+/// QMC blocks in a chunk of photons.
+const BLOCKS_PER_CHUNK: usize = (super::CHUNK_PHOTONS >> crate::rng::QMC_LOG2_BLOCK) as usize;
+
+/// The QMC block (within its chunk) of the photon at chunk offset `offset`.
+#[inline]
+fn block_in_chunk(offset: u32) -> usize {
+    (offset >> crate::rng::QMC_LOG2_BLOCK) as usize
+}
 
 /// A photon's hit as pass 2's kernels read it.
 struct Hit<'s> {
@@ -296,6 +302,16 @@ impl Tracer<'_> {
             &mut tally.deposits[first_deposit..],
             &mut s.diffuse_slot,
         );
+        // A QMC run's later connections are numbered by rank in their block: each block's
+        // first lane, read before the loop compacts the lanes (they are in photon order).
+        let ranked = self.qmc && map && hit_bounces > 0;
+        let mut block_first_lane = [0; BLOCKS_PER_CHUNK];
+        if ranked {
+            let offsets = &out.survivors.offset[..n];
+            for (b, first) in block_first_lane.iter_mut().enumerate() {
+                *first = offsets.partition_point(|&o| block_in_chunk(o) < b);
+            }
+        }
         // The hits, sliced to the batch: no bounds check in the loop.
         let (hit_tri, hit_u, hit_v) = (&hits.tri[..n], &hits.u[..n], &hits.v[..n]);
         let (ngx, ngy, ngz) = (&hits.ngx[..n], &hits.ngy[..n], &hits.ngz[..n]);
@@ -328,11 +344,7 @@ impl Tracer<'_> {
             let surfacing = &self.surfacings[surface.material as usize];
             let weight = out.survivors.weight(k);
             if !LAMBERT_TRACK && self.any_connects && surfacing.connectable && weight > 0.0 {
-                let rank = (self.qmc && map && hit_bounces > 0).then(|| {
-                    let offsets = &out.survivors.offset[..n];
-                    let block_start = offset & !QMC_BLOCK_MASK;
-                    (k - offsets.partition_point(|&o| o < block_start)) as u32
-                });
+                let rank = ranked.then(|| (k - block_first_lane[block_in_chunk(offset)]) as u32);
                 self.connect(
                     surface.point,
                     normal,
