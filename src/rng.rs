@@ -249,7 +249,13 @@ mod tests {
     /// Whether every box of 2^a × 2^(M−t−a) cells, for every a, holds exactly 2^t
     /// points: a (t, M, 2)-net.
     fn is_a_net(points: &[(u32, u32)], t: u32) -> bool {
-        let m = M - t;
+        is_a_net_of(points, M, t)
+    }
+
+    /// [`is_a_net`] for 2^`log2_points` points (on the same 2^M × 2^M grid): a
+    /// (t, log2_points, 2)-net.
+    fn is_a_net_of(points: &[(u32, u32)], log2_points: u32, t: u32) -> bool {
+        let m = log2_points - t;
         (0..=m).all(|a| {
             let mut count = vec![0u32; 1 << m];
             for &(u, v) in points {
@@ -307,16 +313,10 @@ mod tests {
                     )
                 })
                 .collect();
-            let m = k as usize;
-            let all = (0..=m).all(|a| {
-                let mut count = vec![0u32; 1 << m];
-                for &(u, v) in &prefix {
-                    count[(((u >> (M as usize - a)) << (m - a)) | (v >> (M as usize - m + a)))
-                        as usize] += 1;
-                }
-                count.iter().all(|&c| c == 1)
-            });
-            assert!(all, "the first 2^{k} ranks are not a (0, {k}, 2)-net");
+            assert!(
+                is_a_net_of(&prefix, k, 0),
+                "the first 2^{k} ranks are not a (0, {k}, 2)-net"
+            );
         }
         assert_ne!(
             qmc_square_ranked(3, 0, 17, draw),
