@@ -12,6 +12,21 @@ pub fn uniform(rng: &mut Pcg32) -> f64 {
     rng.next_u32() as f64 * (1.0 / 4_294_967_296.0)
 }
 
+/// Where `x` in [0, 1) falls in the cumulative sums `cdf` (non-decreasing, read through
+/// `sum`): the index of the interval holding it and `x`'s fraction across that interval,
+/// in [0, 1) and uniform again when `x` is. Inversion keeps neighbouring numbers in
+/// neighbouring intervals, which a QMC point's strata need. Zero-width intervals are never
+/// chosen (all zero: the last, with `x` as it is).
+#[inline]
+pub fn invert_cdf<T>(cdf: &[T], sum: impl Fn(&T) -> f64, x: f64) -> (usize, f64) {
+    let last = cdf.len() - 1;
+    let y = x * sum(&cdf[last]);
+    let k = cdf.partition_point(|c| sum(c) <= y).min(last);
+    let (lo, hi) = (if k == 0 { 0.0 } else { sum(&cdf[k - 1]) }, sum(&cdf[k]));
+    let fraction = if hi > lo { (y - lo) / (hi - lo) } else { x };
+    (k, fraction.clamp(0.0, 1.0 - f64::EPSILON / 2.0))
+}
+
 /// A uniform random number in [0, 1) as an f32 from one 32-bit draw (24 bits kept):
 /// for directions handed to the ray caster, which takes f32 anyway.
 #[inline]

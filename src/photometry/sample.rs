@@ -12,7 +12,7 @@
 //! distant cells, which is harmless for random numbers and wasteful for a net.
 
 use super::grid::Grid;
-use crate::sampling::uniform;
+use crate::sampling::{invert_cdf, uniform};
 use glam::DVec3;
 use rand_pcg::Pcg32;
 
@@ -89,26 +89,13 @@ struct Column {
     cells: Vec<(f64, u32)>,
 }
 
-/// Where `x` in [0, 1) falls in the cumulative sums `cdf` (non-decreasing, positive last
-/// entry): the entry whose interval holds it and its fraction across that interval, in
-/// [0, 1). Zero-width entries are never chosen.
-#[inline]
-fn invert<T>(cdf: &[(f64, T)], x: f64) -> (usize, f64) {
-    let total = cdf[cdf.len() - 1].0;
-    let y = x * total;
-    let k = cdf.partition_point(|&(c, _)| c <= y).min(cdf.len() - 1);
-    let lo = if k == 0 { 0.0 } else { cdf[k - 1].0 };
-    let fraction = (y - lo) / (cdf[k].0 - lo);
-    (k, fraction.clamp(0.0, 1.0 - f64::EPSILON / 2.0))
-}
-
 impl Inversion {
     /// The cell of `cells` the point picks, and the point's place inside it.
     #[inline]
     fn sample(&self, (u, v): (f64, f64)) -> (usize, (f64, f64)) {
-        let (i, along) = invert(&self.columns, u);
+        let (i, along) = invert_cdf(&self.columns, |c| c.0, u);
         let column = &self.columns[i].1.cells;
-        let (j, across) = invert(column, v);
+        let (j, across) = invert_cdf(column, |c| c.0, v);
         (column[j].1 as usize, (along, across))
     }
 }

@@ -4,6 +4,7 @@
 
 use crate::light::{BoundingSphere, EmissionSquares, Emitter, Incoming};
 use crate::rng::{qmc_square, PhotonStreams, QmcDraw};
+use crate::sampling::invert_cdf;
 use crate::scene::Scene;
 use glam::DVec3;
 use rand_pcg::Pcg32;
@@ -103,12 +104,11 @@ impl Emitters {
     /// across that share (uniform in [0, 1) again).
     #[inline]
     fn light_of_square(&self, (u, v): (f64, f64)) -> (usize, (f64, f64)) {
-        let last = self.cdf.len().saturating_sub(1);
-        let k = self.cdf.iter().position(|&c| u < c).unwrap_or(last);
-        let lo = if k == 0 { 0.0 } else { self.cdf[k - 1] };
-        let hi = self.cdf[k];
-        let u = if hi > lo { (u - lo) / (hi - lo) } else { u };
-        (k, (u.clamp(0.0, 1.0 - f64::EPSILON / 2.0), v))
+        if self.cdf.is_empty() {
+            return (0, (u, v));
+        }
+        let (light, u) = invert_cdf(&self.cdf, |&c| c, u);
+        (light, (u, v))
     }
 
     /// Origins and directions (f32, for the ray caster) of the photons `streams.first`,
