@@ -164,6 +164,23 @@ fn block_square(seed: u64, photon: u64, rank: Option<u32>, draw: QmcDraw) -> (f6
     (coordinate(first_dimension), coordinate(first_dimension + 1))
 }
 
+/// Point `sample` of replicate `replicate` of direct-light cell `cell`'s QMC pattern in a
+/// run seeded with `seed` (`run --qmc`), in [0, 1)⁴: point `sample` of the Sobol'
+/// sequence's dimensions 0–3, each Owen-scrambled by hashes of (seed, cell, replicate).
+/// Every point is uniform on [0, 1)⁴, so each sample stays unbiased, and replicates are
+/// independent scrambles, so their spread is their mean's σ as for ordinary replicates;
+/// a replicate's 2^k points are a (0, k, 2)-net in dimensions 0–1 and a (t, k, 2)-net
+/// (t ≤ 2) in dimensions 2–3.
+#[inline]
+pub fn direct_qmc_point(seed: u64, cell: u64, replicate: u64, sample: u32) -> [f64; 4] {
+    let scramble = mix64(mix64(seed ^ 0x5be0_cd19_137e_2179) ^ cell.wrapping_mul(GOLDEN_GAMMA));
+    let scramble = mix64(scramble ^ replicate);
+    std::array::from_fn(|d| {
+        let x = nested_uniform_scramble(sobol(sample, d), mix64(scramble ^ (d as u64 + 1)) as u32);
+        x as f64 * (1.0 / 4_294_967_296.0)
+    })
+}
+
 /// Sobol's first six dimensions' direction numbers (Joe & Kuo's new-joe-kuo-6.21201: the
 /// van der Corput sequence, then the primitive polynomials x + 1, x² + x + 1,
 /// x³ + x + 1, x³ + x² + 1 and x⁴ + x + 1 with m = (1), (1, 3), (1, 3, 1), (1, 1, 1),
@@ -348,6 +365,44 @@ mod tests {
             }
             let chi2: f64 = bins.iter().map(|&b| (b as f64 - 64.0).powi(2) / 64.0).sum();
             assert!(chi2 < 340.0, "{draw:?}: χ² = {chi2}");
+        }
+    }
+
+    /// A direct-light replicate's 2^k points are a (0, k, 2)-net in dimensions 0–1 and a
+    /// (t ≤ 2, k, 2)-net in 2–3, for the 4, 16 and 64 points of 2, 4 and 8 per side;
+    /// cells and replicates have their own scrambles, and a sample's point is uniform
+    /// over replicates.
+    #[test]
+    fn a_direct_replicates_points_are_nets_and_uniform_over_replicates() {
+        let grid = |x: f64| (x * (1u64 << M) as f64) as u32;
+        for k in [2, 4, 6] {
+            let points: Vec<[f64; 4]> = (0..1u32 << k)
+                .map(|sample| direct_qmc_point(3, 40, 7, sample))
+                .collect();
+            let pair = |d: usize| -> Vec<(u32, u32)> {
+                points
+                    .iter()
+                    .map(|p| (grid(p[d]), grid(p[d + 1])))
+                    .collect()
+            };
+            assert!(is_a_net_of(&pair(0), k, 0), "dimensions 0–1, 2^{k} points");
+            assert!(
+                is_a_net_of(&pair(2), k, 2.min(k)),
+                "dimensions 2–3, 2^{k} points"
+            );
+        }
+        let point = direct_qmc_point(3, 40, 7, 5);
+        assert_ne!(point, direct_qmc_point(3, 41, 7, 5));
+        assert_ne!(point, direct_qmc_point(3, 40, 8, 5));
+        assert_ne!(point, direct_qmc_point(4, 40, 7, 5));
+        for d in [0, 2] {
+            let mut bins = [0u32; 256];
+            for replicate in 0..16_384u64 {
+                let p = direct_qmc_point(11, 9, replicate, 13);
+                bins[(p[d] * 16.0) as usize * 16 + (p[d + 1] * 16.0) as usize] += 1;
+            }
+            let chi2: f64 = bins.iter().map(|&b| (b as f64 - 64.0).powi(2) / 64.0).sum();
+            assert!(chi2 < 340.0, "dimensions {d}–{}: χ² = {chi2}", d + 1);
         }
     }
 

@@ -217,6 +217,7 @@ impl<'a> Tracer<'a> {
             slack: self.receiver_slack,
             seed: self.seed,
             reflectors: Some(&self.reflectors),
+            qmc: self.qmc,
         }
     }
 

@@ -33,6 +33,18 @@ pub fn run_scene(toml: &str, photons: u64) -> Summary {
     run_options(&s, &options(&s, photons, 2, Backend::Embree))
 }
 
+/// [`run_scene`] under randomised QMC (`run --qmc`), `photons` rounded up to whole
+/// chunks as QMC runs need.
+pub fn run_scene_qmc(toml: &str, photons: u64) -> Summary {
+    let s = scene(toml);
+    let chunk = luxtally::trace::CHUNK_PHOTONS;
+    let opts = RunOptions {
+        qmc: true,
+        ..options(&s, photons.div_ceil(chunk) * chunk, 2, Backend::Embree)
+    };
+    run_options(&s, &opts)
+}
+
 /// [`run_scene`] with every receiver scored by `estimator`.
 pub fn run_scene_with(toml: &str, photons: u64, estimator: Estimator) -> Summary {
     let s = scene(toml);

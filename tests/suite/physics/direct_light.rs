@@ -9,6 +9,7 @@ use crate::common;
 
 use common::*;
 use glam::DVec3;
+use luxtally::output::summary::Summary;
 use luxtally::scene::Estimator;
 
 const LUMINANCE: f64 = 1000.0;
@@ -171,7 +172,17 @@ const BLACK_ROOM_PANEL: &str = r#"
 
 #[test]
 fn panel_past_an_obstacle_matches_lamberts_formula_on_its_visible_part() {
-    let s = run_scene(BLACK_ROOM_PANEL, 1_000_000);
+    panel_past_an_obstacle(run_scene);
+}
+
+/// The same under `--qmc`, whose replicates are scrambled Sobol' patterns.
+#[test]
+fn qmc_panel_past_an_obstacle_matches_lamberts_formula_on_its_visible_part() {
+    panel_past_an_obstacle(run_scene_qmc);
+}
+
+fn panel_past_an_obstacle(run: fn(&str, u64) -> Summary) {
+    let s = run(BLACK_ROOM_PANEL, 1_000_000);
     for (name, corner, u, v, n) in [
         (
             "table",
@@ -248,9 +259,18 @@ fn panel_past_an_obstacle_matches_lamberts_formula_on_its_visible_part() {
 
 #[test]
 fn points_beside_an_area_sources_plane_at_grazing_angles_are_calibrated() {
+    beside_an_area_sources_plane(run_scene);
+}
+
+#[test]
+fn qmc_points_beside_an_area_sources_plane_at_grazing_angles_are_calibrated() {
+    beside_an_area_sources_plane(run_scene_qmc);
+}
+
+fn beside_an_area_sources_plane(run: fn(&str, u64) -> Summary) {
     // A vertical receiver facing +x just beside the panel's edge (x = 1), from 10 cm to
     // 1 mm below the panel's plane: light arrives at up to 89.96° from the source's normal.
-    let s = run_scene(
+    let s = run(
         r#"
         [[lights]]
         type = "area"
@@ -290,8 +310,17 @@ fn points_beside_an_area_sources_plane_at_grazing_angles_are_calibrated() {
 
 #[test]
 fn spot_cone_edge_cells_are_calibrated_and_dark_cells_unknown() {
+    spot_cone_edge(run_scene);
+}
+
+#[test]
+fn qmc_spot_cone_edge_cells_are_calibrated_and_dark_cells_unknown() {
+    spot_cone_edge(run_scene_qmc);
+}
+
+fn spot_cone_edge(run: fn(&str, u64) -> Summary) {
     // A hard-edged spot (no falloff): the cone's edge cuts cells anywhere.
-    let s = run_scene(
+    let s = run(
         r#"
         [[lights]]
         type = "spot"
@@ -536,6 +565,7 @@ fn cell_sides(toml: &str) -> (Vec<u32>, u32) {
         slack: 1e-6,
         seed: 1,
         reflectors: None,
+        qmc: false,
     };
     (
         direct.cell_sides(&grid, None),

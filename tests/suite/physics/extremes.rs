@@ -182,6 +182,7 @@ fn cell_moments_match_a_high_precision_recomputation_from_the_replicates() {
         slack: 1e-6,
         seed: 3,
         reflectors: None,
+        qmc: false,
     };
     let sides = direct.cell_sides(&grid, None);
     let replicates = 200u64;
