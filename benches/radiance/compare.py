@@ -373,8 +373,9 @@ def cached_main(a):
     def lux(err, seed):
         out = Path(tempfile.mkdtemp(prefix="luxtally-", dir=work))
         l0 = os.getloadavg()
+        qmc = ["--qmc"] if a.lux_qmc and err != a.ref_error else []
         s, wall, cmd = run_luxtally(lux_bin, scene, ["--target-error", str(err), "--photons", "1000000000",
-                                                     "--seed", str(seed)], a.procs, out)
+                                                     "--seed", str(seed), *qmc], a.procs, out)
         l1 = os.getloadavg()
         shutil.rmtree(out, ignore_errors=True)
         d = s["receivers"]["desk"]
@@ -475,7 +476,8 @@ def cached_main(a):
           f"{f(d['lux_time'], d['lux_how'])} | {ratio(d['lux_time'])} | {f(d['lux_time_off'], d['lux_how_off'])} | "
           f"{ratio(d['lux_time_off'])} |")
     P("")
-    P("luxtally runs (`run scenes/office.toml --target-error E --photons 1000000000 --threads 2 --quiet --seed S`):")
+    qmc = " --qmc" if a.lux_qmc else ""
+    P(f"luxtally runs (`run scenes/office.toml --target-error E --photons 1000000000 --threads 2 --quiet --seed S{qmc}`):")
     P("")
     P("| target E | seed | wall (s) | photons | stated error | error vs ref | mean offset vs ref | error, offset removed | load |")
     P("|---:|---:|---:|---:|---:|---:|---:|---:|---|")
@@ -533,6 +535,8 @@ def main():
     g.add_argument("--reuse-rtrace", action="store_true",
                    help="reuse WORKDIR/runs/KEY.json of an earlier run with the same settings")
     g.add_argument("--md", type=Path, help="--cached: also write the tables here")
+    g.add_argument("--lux-qmc", action="store_true",
+                   help="luxtally's timed runs with --qmc (the reference stays an ordinary run)")
     a = ap.parse_args()
     if a.cached:
         if a.workdir == REPO / "target" / "radiance-compare":

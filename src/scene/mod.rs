@@ -411,8 +411,8 @@ pub struct Simulation {
     /// Two-sided confidence of the receivers' figures' intervals (`confidence`, 0.95 by
     /// default). It changes no photon's numbers, so a checkpoint resumes under another.
     pub confidence: f64,
-    /// Randomised quasi-Monte Carlo connection points (`qmc`; `run --qmc`): see
-    /// `trace::Tracer::with_qmc`.
+    /// Randomised quasi-Monte Carlo emission, connection points and direct-light
+    /// replicates (`qmc`; `run --qmc`): see `trace::Tracer::with_qmc`.
     pub qmc: bool,
 }
 

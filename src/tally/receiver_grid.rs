@@ -57,7 +57,8 @@ pub fn connections_for(cells: usize) -> u32 {
 /// with 16, 4699 with 32 (blocks of 4096), and at 1 % per cell 41.8 M rays with 16
 /// against 48.4 M with 32 (blocks of 2048); the luminaires' work plane (640 cells,
 /// stratified emission), at 1 % per cell, 5.63 M rays with 10, 4.76 M with 20, 4.34 M
-/// with 32, 6.06 M with 64 (before later connections by rank; with them, 3.97–4.18 M with 32).
+/// with 32, 6.06 M with 64 (before later connections by rank; with them, 3.97–4.18 M with
+/// 32, and 3.55 M once the direct light's replicates took QMC patterns).
 pub fn qmc_connections_for(cells: usize, stratified_emission: bool) -> u32 {
     let cells_per_connection = if stratified_emission { 20 } else { 64 };
     cells.div_ceil(cells_per_connection).clamp(1, 32) as u32

@@ -186,7 +186,8 @@ impl<'a> Tracer<'a> {
     /// history of the cells' moments ([`Tallies::set_qmc_blocks`]): only blocks are
     /// independent. Receivers whose connection points are QMC's (not the luminance
     /// meters', drawn in their cones) take
-    /// [`crate::tally::receiver_grid::qmc_connections_for`] of them.
+    /// [`crate::tally::receiver_grid::qmc_connections_for`] of them. The direct light's
+    /// replicates take scrambled Sobol' patterns too ([`Self::direct_light`]).
     pub fn with_qmc(mut self, qmc: bool) -> Self {
         self.qmc = qmc;
         self.emitters = self.emitters.with_qmc(qmc.then_some(self.seed));

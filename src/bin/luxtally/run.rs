@@ -41,10 +41,11 @@ pub struct RunArgs {
     /// (default: each receiver's own `estimator`).
     #[arg(long, hide_possible_values = true)]
     pub estimator: Option<Estimator>,
-    /// Randomised quasi-Monte Carlo connection points to the receivers (Owen-scrambled
-    /// Sobol' per block of 2048 photons, each block one history of the statistics);
-    /// --photons is rounded up to whole chunks of 4096 (default: the scene's
-    /// [simulation] qmc).
+    /// Randomised quasi-Monte Carlo emission and connection points to the receivers
+    /// (Owen-scrambled Sobol' per block of 2048 photons, each block one history of the
+    /// statistics) and direct-light replicates; faster to about 1 % per cell and
+    /// beyond, slower to loose targets; --photons is rounded up to whole chunks of 4096
+    /// (default: the scene's [simulation] qmc).
     #[arg(long)]
     pub qmc: bool,
     /// No progress line.
