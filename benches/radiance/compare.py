@@ -306,7 +306,13 @@ def error_vs_ref(vals, ref, ref_var_q):
 def loglog_time_at(err, levels):
     """luxtally's wall time at per-cell error ERR: log-log interpolation between the two
     bracketing levels [(error, time)], or extrapolation from the nearest two (flagged)."""
-    pts = sorted((e, t) for e, t in levels if e > 0)
+    # Levels that stopped at the same error ran the same photons (a QMC run's 32-block
+    # minimum meets several loose targets at once): one point, their mean time.
+    same = {}
+    for e, t in levels:
+        if e > 0:
+            same.setdefault(e, []).append(t)
+    pts = sorted((e, sum(ts) / len(ts)) for e, ts in same.items())
     if err <= 0 or len(pts) < 2:
         return None, "n/a"
     if err < pts[0][0]:
