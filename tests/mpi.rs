@@ -51,7 +51,18 @@ fn summary(dir: &Path) -> Value {
 
 #[test]
 fn two_ranks_give_the_bits_of_one_process() {
-    let one = temp_dir("one");
+    two_ranks_as_one_process("plain", &[]);
+}
+
+/// The same under `--qmc`: blocks of photons, QMC points and the direct light's Sobol'
+/// patterns are functions of the seed and indices alone.
+#[test]
+fn two_ranks_give_the_bits_of_one_process_under_qmc() {
+    two_ranks_as_one_process("qmc", &["--qmc"]);
+}
+
+fn two_ranks_as_one_process(name: &str, extra: &[&str]) {
+    let one = temp_dir(&format!("{name}-one"));
     ok(Command::new(env!("CARGO_BIN_EXE_luxtally"))
         .args([
             "run",
@@ -61,25 +72,32 @@ fn two_ranks_give_the_bits_of_one_process() {
             "--seed",
             "9",
             "--quiet",
-            "--out",
         ])
+        .args(extra)
+        .arg("--out")
         .arg(&one)
         .output()
         .unwrap());
-    let two = temp_dir("two");
-    ok(mpirun(&[
-        "run",
-        SCENE,
-        "--photons",
-        "400000",
-        "--seed",
-        "9",
-        "--threads",
-        "1",
-        "--quiet",
-        "--out",
-        two.to_str().unwrap(),
-    ]));
+    let two = temp_dir(&format!("{name}-two"));
+    ok(mpirun(
+        &[
+            &[
+                "run",
+                SCENE,
+                "--photons",
+                "400000",
+                "--seed",
+                "9",
+                "--threads",
+                "1",
+                "--quiet",
+                "--out",
+                two.to_str().unwrap(),
+            ],
+            extra,
+        ]
+        .concat(),
+    ));
     let (a, b) = (summary(&one), summary(&two));
     for k in [
         "photons_emitted",
