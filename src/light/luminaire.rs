@@ -257,6 +257,10 @@ impl Emitter for LuminaireEmitter {
         true
     }
 
+    fn origin_from_square(&self) -> bool {
+        true
+    }
+
     fn sample_emission_from(&self, squares: EmissionSquares, rng: &mut Pcg32) -> (DVec3, DVec3) {
         let (a, b) = squares.origin;
         let p = self.position + self.frame * self.photometry.opening.point_at(a, b);

@@ -135,7 +135,8 @@ pub fn emission_lanes_one_by_one(
 
 /// A QMC photon's numbers for its emission ([`Emitter::sample_emission_from`]): the
 /// pair that picks its direction ([`crate::rng::QmcDraw::Emission`]) and the pair that
-/// places it on the source ([`crate::rng::QmcDraw::Origin`]), each in [0, 1)².
+/// places it on the source ([`crate::rng::QmcDraw::Origin`]; (0, 0) unless
+/// [`Emitter::origin_from_square`]), each in [0, 1)².
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EmissionSquares {
     pub direction: (f64, f64),
@@ -175,6 +176,12 @@ pub trait Emitter: Debug + Send + Sync {
     /// Whether [`Emitter::sample_emission_from`] takes its direction from the numbers
     /// given (else a QMC run emits as an ordinary one, in lanes where it can).
     fn direction_from_square(&self) -> bool {
+        false
+    }
+
+    /// Whether [`Emitter::sample_emission_from`] reads `squares.origin` (else a QMC run
+    /// leaves it at (0, 0) and saves its hashing).
+    fn origin_from_square(&self) -> bool {
         false
     }
 

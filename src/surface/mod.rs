@@ -543,6 +543,11 @@ impl Bsdf {
         self.lobes.iter().any(|(_, l)| l.connectable())
     }
 
+    /// Some part of it (a mirror, glass, glazing, a sharp gloss) is only sampled.
+    pub fn scatters_unconnected(&self) -> bool {
+        self.lobes.iter().any(|(_, l)| !l.connectable())
+    }
+
     /// The BSDF's finite part f(wo, wi) (1/sr); the Dirac lobes are zero almost
     /// everywhere. `n` is the unit geometric normal, whose side is the dielectrics'
     /// outside.

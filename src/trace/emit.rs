@@ -150,7 +150,11 @@ impl Emitters {
             let photon = streams.first + k as u64;
             let (light, direction) =
                 self.light_of_square(qmc_square(seed, photon, QmcDraw::Emission));
-            let origin = qmc_square(seed, photon, QmcDraw::Origin);
+            let origin = if self.emitters[light].origin_from_square() {
+                qmc_square(seed, photon, QmcDraw::Origin)
+            } else {
+                (0.0, 0.0)
+            };
             let squares = EmissionSquares { direction, origin };
             self.emitters[light].sample_emission_from(squares, rng)
         });

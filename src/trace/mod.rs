@@ -186,12 +186,20 @@ impl<'a> Tracer<'a> {
     /// history of the cells' moments ([`Tallies::set_qmc_blocks`]): only blocks are
     /// independent. Receivers whose connection points are QMC's (not the luminance
     /// meters', drawn in their cones) take
-    /// [`crate::tally::receiver_grid::qmc_connections_for`] of them. The direct light's
+    /// [`crate::tally::receiver_grid::qmc_connections_for`] of them, unless the scene has
+    /// mirrors or glass. The direct light's
     /// replicates take scrambled Sobol' patterns too ([`Self::direct_light`]).
     pub fn with_qmc(mut self, qmc: bool) -> Self {
         self.qmc = qmc;
         self.emitters = self.emitters.with_qmc(qmc.then_some(self.seed));
-        if qmc {
+        // Light that reaches receivers through mirrors or glass (not glazing, which
+        // shadow rays see through) is scored by crossing, which more connections do not
+        // help: such scenes keep the ordinary count.
+        let caustics = self
+            .surfacings
+            .iter()
+            .any(|s| !s.see_through && s.bsdf.scatters_unconnected());
+        if qmc && !caustics {
             let stratified = self.emitters.emission_from_square();
             for r in self.receivers.iter_mut().filter(|r| !r.is_luminance()) {
                 r.connections =
@@ -730,6 +738,29 @@ fn add_history(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The next-event receivers' connections per vertex under QMC, for a bundled scene.
+    fn qmc_connections(scene_file: &str) -> (u32, u32, u32) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(scene_file);
+        let scene = crate::scene::load(&path).unwrap();
+        let caster = crate::accel::build(crate::accel::Backend::Embree, &scene.geometry).unwrap();
+        let tracer = Tracer::new(&scene, caster.as_ref(), 1, None).with_qmc(true);
+        let r = &tracer.receivers[0];
+        let ordinary = crate::tally::receiver_grid::connections_for(r.cell_count());
+        let stratified = tracer.emitters.emission_from_square();
+        let qmc = crate::tally::receiver_grid::qmc_connections_for(r.cell_count(), stratified);
+        (r.connections, ordinary, qmc)
+    }
+
+    #[test]
+    fn qmc_adds_connections_unless_mirrors_or_glass_carry_light_to_receivers() {
+        let (glass, ordinary, qmc) = qmc_connections("scenes/glass.toml");
+        assert!(qmc > ordinary, "the glass floor would otherwise take more");
+        assert_eq!(glass, ordinary);
+        let (luminaires, ordinary, qmc) = qmc_connections("scenes/luminaires.toml");
+        assert!(qmc > ordinary);
+        assert_eq!(luminaires, qmc);
+    }
 
     #[test]
     fn histories_fold_per_photon_and_cell() {

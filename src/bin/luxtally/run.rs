@@ -44,8 +44,9 @@ pub struct RunArgs {
     /// Randomised quasi-Monte Carlo emission and connection points to the receivers
     /// (Owen-scrambled Sobol' per block of 2048 photons, each block one history of the
     /// statistics) and direct-light replicates; faster to about 1 % per cell and
-    /// beyond, slower to loose targets; --photons is rounded up to whole chunks of 4096
-    /// (default: the scene's [simulation] qmc).
+    /// beyond on illuminance and cylindrical grids, slower to loose targets and on
+    /// luminance meters alone; --photons is rounded up to whole chunks of 4096 (default:
+    /// the scene's [simulation] qmc).
     #[arg(long)]
     pub qmc: bool,
     /// No progress line.
