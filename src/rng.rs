@@ -143,25 +143,62 @@ pub fn qmc_square_ranked(seed: u64, photon: u64, rank: u32, draw: QmcDraw) -> (f
 
 #[inline]
 fn block_square(seed: u64, photon: u64, rank: Option<u32>, draw: QmcDraw) -> (f64, f64) {
-    let (pair, first_dimension) = match draw {
-        QmcDraw::Emission => (u64::MAX, 0),
-        QmcDraw::FirstConnection => (u64::MAX, 2),
-        QmcDraw::Origin => (u64::MAX, 4),
-        QmcDraw::Padded(pair) => (pair, 0),
-    };
-    let scramble = mix64(mix64(seed ^ 0x1f83_d9ab_fb41_bd6b) ^ (photon >> QMC_LOG2_BLOCK));
-    let scramble = mix64(scramble ^ pair.wrapping_mul(GOLDEN_GAMMA));
-    let mask = (1u32 << QMC_LOG2_BLOCK) - 1;
-    let index = match rank {
-        Some(rank) => rank & mask,
-        None => nested_uniform_scramble(photon as u32 & mask, scramble as u32) & mask,
-    };
-    let coordinate = |d: usize| {
-        let x = sobol(index, d);
-        let x = nested_uniform_scramble(x, mix64(scramble ^ (d as u64 + 1)) as u32);
-        x as f64 * (1.0 / 4_294_967_296.0)
-    };
-    (coordinate(first_dimension), coordinate(first_dimension + 1))
+    QmcBlock::new(seed, photon, draw).square(photon, rank)
+}
+
+/// The scrambles of one draw over one block of photons ([`qmc_square`]): computed once,
+/// they serve every photon of the block (an emission loop's photons run in blocks).
+#[derive(Clone, Copy, Debug)]
+pub struct QmcBlock {
+    block: u64,
+    index_key: u32,
+    dimension_keys: [u32; 2],
+    first_dimension: usize,
+}
+
+impl QmcBlock {
+    /// The scrambles of `draw` over the block that holds photon `photon`.
+    #[inline]
+    pub fn new(seed: u64, photon: u64, draw: QmcDraw) -> QmcBlock {
+        let (pair, first_dimension) = match draw {
+            QmcDraw::Emission => (u64::MAX, 0),
+            QmcDraw::FirstConnection => (u64::MAX, 2),
+            QmcDraw::Origin => (u64::MAX, 4),
+            QmcDraw::Padded(pair) => (pair, 0),
+        };
+        let block = photon >> QMC_LOG2_BLOCK;
+        let scramble = mix64(mix64(seed ^ 0x1f83_d9ab_fb41_bd6b) ^ block);
+        let scramble = mix64(scramble ^ pair.wrapping_mul(GOLDEN_GAMMA));
+        let key = |d: usize| mix64(scramble ^ (d as u64 + 1)) as u32;
+        QmcBlock {
+            block,
+            index_key: scramble as u32,
+            dimension_keys: [key(first_dimension), key(first_dimension + 1)],
+            first_dimension,
+        }
+    }
+
+    /// Whether photon `photon` is in this block.
+    #[inline]
+    pub fn holds(&self, photon: u64) -> bool {
+        photon >> QMC_LOG2_BLOCK == self.block
+    }
+
+    /// Photon `photon`'s point (the block's point number `rank` when given).
+    #[inline]
+    pub fn square(&self, photon: u64, rank: Option<u32>) -> (f64, f64) {
+        debug_assert!(self.holds(photon));
+        let mask = (1u32 << QMC_LOG2_BLOCK) - 1;
+        let index = match rank {
+            Some(rank) => rank & mask,
+            None => nested_uniform_scramble(photon as u32 & mask, self.index_key) & mask,
+        };
+        let coordinate = |k: usize| {
+            let x = sobol(index, self.first_dimension + k);
+            nested_uniform_scramble(x, self.dimension_keys[k]) as f64 * (1.0 / 4_294_967_296.0)
+        };
+        (coordinate(0), coordinate(1))
+    }
 }
 
 /// Point `sample` of replicate `replicate` of direct-light cell `cell`'s QMC pattern in a

@@ -3,7 +3,7 @@
 //! What each kind emits lives in `crate::light`; nothing here knows the kinds.
 
 use crate::light::{BoundingSphere, EmissionSquares, Emitter, Incoming};
-use crate::rng::{qmc_square, PhotonStreams, QmcDraw};
+use crate::rng::{qmc_square, PhotonStreams, QmcBlock, QmcDraw};
 use crate::sampling::invert_cdf;
 use crate::scene::Scene;
 use glam::DVec3;
@@ -146,12 +146,17 @@ impl Emitters {
         if !self.emitters.iter().any(|e| e.direction_from_square()) {
             return self.sample_lanes(streams, rngs, o, d);
         }
+        let mut blocks = [QmcDraw::Emission, QmcDraw::Origin]
+            .map(|draw| QmcBlock::new(seed, streams.first, draw));
         crate::light::emission_lanes_one_by_one(streams, rngs, o, d, |k, rng| {
             let photon = streams.first + k as u64;
-            let (light, direction) =
-                self.light_of_square(qmc_square(seed, photon, QmcDraw::Emission));
+            if !blocks[0].holds(photon) {
+                blocks = [QmcDraw::Emission, QmcDraw::Origin]
+                    .map(|draw| QmcBlock::new(seed, photon, draw));
+            }
+            let (light, direction) = self.light_of_square(blocks[0].square(photon, None));
             let origin = if self.emitters[light].origin_from_square() {
-                qmc_square(seed, photon, QmcDraw::Origin)
+                blocks[1].square(photon, None)
             } else {
                 (0.0, 0.0)
             };

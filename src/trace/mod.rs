@@ -555,8 +555,8 @@ impl<'a> Tracer<'a> {
         let facing = if wo.dot(n) >= 0.0 { normal } else { -normal };
         // A QMC run's first vertex: one point for all its connections, each shifted into
         // its stratum (the point's pair with the emission's direction).
-        let first_square = (self.qmc && depth == 0 && !spawned)
-            .then(|| qmc_square(self.seed, photon, QmcDraw::FirstConnection));
+        let first_vertex = depth == 0 && !spawned;
+        let mut first_square = None;
         for (k, r, stratum) in self
             .receivers
             .iter()
@@ -566,15 +566,19 @@ impl<'a> Tracer<'a> {
             })
             .flat_map(|(k, r)| (0..r.connections).map(move |s| (k, r, s)))
         {
-            let square = first_square.or_else(|| {
-                self.qmc.then(|| {
-                    let pair = ((depth as u64) << 40) ^ ((k as u64) << 20) ^ stratum as u64;
-                    let draw = QmcDraw::Padded(pair ^ ((spawned as u64) << 60));
-                    match rank {
-                        Some(rank) => qmc_square_ranked(self.seed, photon, rank, draw),
-                        None => qmc_square(self.seed, photon, draw),
-                    }
-                })
+            // Luminance meters draw their directions in their cones, not from the points.
+            let square = (self.qmc && !r.is_luminance()).then(|| {
+                if first_vertex {
+                    return *first_square.get_or_insert_with(|| {
+                        qmc_square(self.seed, photon, QmcDraw::FirstConnection)
+                    });
+                }
+                let pair = ((depth as u64) << 40) ^ ((k as u64) << 20) ^ stratum as u64;
+                let draw = QmcDraw::Padded(pair ^ ((spawned as u64) << 60));
+                match rank {
+                    Some(rank) => qmc_square_ranked(self.seed, photon, rank, draw),
+                    None => qmc_square(self.seed, photon, draw),
+                }
             });
             let Some(c) = r.connect(p.as_dvec3(), stratum, square, rng) else {
                 continue;
