@@ -8,7 +8,7 @@ use luxtally::distributed::Distributor;
 use luxtally::limits;
 use luxtally::output::Outputs;
 use luxtally::run::RunOptions;
-use luxtally::scene::{Estimator, Scene};
+use luxtally::scene::{Estimator, Quantity, Scene};
 use luxtally::{Error, Result};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -151,6 +151,14 @@ pub fn run_options(args: &RunArgs, scene: &Scene) -> Result<RunOptions> {
     options.bvh = args.bvh.unwrap_or(options.bvh);
     options.estimator = args.estimator.or(options.estimator);
     options.qmc |= args.qmc;
+    let all_meters =
+        (scene.receivers.iter()).all(|r| matches!(r.quantity, Quantity::Luminance { .. }));
+    if options.qmc && !scene.receivers.is_empty() && all_meters {
+        eprintln!(
+            "luxtally: qmc: every receiver is a luminance meter, whose directions QMC does \
+             not draw: expect no gain over an ordinary run (docs/method.md)"
+        );
+    }
     if options.qmc {
         // A QMC run traces whole chunks, so whole blocks: its last is never cut short.
         let chunk = luxtally::trace::CHUNK_PHOTONS;

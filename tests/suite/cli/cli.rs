@@ -618,3 +618,29 @@ fn bench_accuracy_measures_qmc_runs() {
         "{photons:?}"
     );
 }
+
+/// `--qmc` on a scene of luminance meters alone says it cannot help there, and runs;
+/// on a scene with an illuminance grid it says nothing of the kind.
+#[test]
+fn qmc_on_luminance_meters_alone_says_it_gains_nothing() {
+    let dir = temp_dir("qmc-meters");
+    let scene = |name: &str| format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"));
+    let stderr_of_run = |name: &str| {
+        let out = dir.join(name);
+        let out = out.to_str().unwrap().to_string();
+        let o = luxtally(&[
+            "run",
+            &scene(name),
+            "--qmc",
+            "--photons",
+            "4096",
+            "--quiet",
+            "--out",
+            &out,
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    assert!(stderr_of_run("office_luminance.toml").contains("expect no gain"));
+    assert!(!stderr_of_run("office.toml").contains("expect no gain"));
+}
