@@ -146,13 +146,13 @@ impl Emitters {
         if !self.emitters.iter().any(|e| e.direction_from_square()) {
             return self.sample_lanes(streams, rngs, o, d);
         }
-        let mut blocks = [QmcDraw::Emission, QmcDraw::Origin]
-            .map(|draw| QmcBlock::new(seed, streams.first, draw));
+        let blocks_of =
+            |photon| [QmcDraw::Emission, QmcDraw::Origin].map(|d| QmcBlock::new(seed, photon, d));
+        let mut blocks = blocks_of(streams.first);
         crate::light::emission_lanes_one_by_one(streams, rngs, o, d, |k, rng| {
             let photon = streams.first + k as u64;
             if !blocks[0].holds(photon) {
-                blocks = [QmcDraw::Emission, QmcDraw::Origin]
-                    .map(|draw| QmcBlock::new(seed, photon, draw));
+                blocks = blocks_of(photon);
             }
             let (light, direction) = self.light_of_square(blocks[0].square(photon, None));
             let origin = if self.emitters[light].origin_from_square() {

@@ -186,24 +186,22 @@ impl<'a> Tracer<'a> {
     /// history of the cells' moments ([`Tallies::set_qmc_blocks`]): only blocks are
     /// independent. Receivers whose connection points are QMC's (not the luminance
     /// meters', drawn in their cones) take
-    /// [`crate::tally::receiver_grid::qmc_connections_for`] of them, unless the scene has
-    /// mirrors or glass. The direct light's
+    /// [`crate::tally::receiver_grid::qmc_connections_for`] of them. The direct light's
     /// replicates take scrambled Sobol' patterns too ([`Self::direct_light`]).
     pub fn with_qmc(mut self, qmc: bool) -> Self {
         self.qmc = qmc;
         self.emitters = self.emitters.with_qmc(qmc.then_some(self.seed));
-        // Light that reaches receivers through mirrors or glass (not glazing, which
-        // shadow rays see through) is scored by crossing, which more connections do not
-        // help: such scenes keep the ordinary count.
-        let caustics = self
-            .surfacings
-            .iter()
-            .any(|s| !s.see_through && s.bsdf.scatters_unconnected());
-        if qmc && !caustics {
+        if qmc {
+            // Mirrors or glass (not glazing: shadow rays see through it).
+            let caustics =
+                (self.surfacings.iter()).any(|s| !s.see_through && s.bsdf.scatters_unconnected());
             let stratified = self.emitters.emission_from_square();
             for r in self.receivers.iter_mut().filter(|r| !r.is_luminance()) {
-                r.connections =
-                    crate::tally::receiver_grid::qmc_connections_for(r.cell_count(), stratified);
+                r.connections = crate::tally::receiver_grid::qmc_connections_for(
+                    r.cell_count(),
+                    stratified,
+                    caustics,
+                );
             }
         }
         self
@@ -752,7 +750,8 @@ mod tests {
         let r = &tracer.receivers[0];
         let ordinary = crate::tally::receiver_grid::connections_for(r.cell_count());
         let stratified = tracer.emitters.emission_from_square();
-        let qmc = crate::tally::receiver_grid::qmc_connections_for(r.cell_count(), stratified);
+        let qmc =
+            crate::tally::receiver_grid::qmc_connections_for(r.cell_count(), stratified, false);
         (r.connections, ordinary, qmc)
     }
 
